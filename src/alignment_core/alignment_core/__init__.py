@@ -1,0 +1,1 @@
+"""Pure-Python physics and estimation library for shipboard transfer alignment (no ROS imports)."""

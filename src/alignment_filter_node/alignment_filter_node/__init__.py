@@ -1,0 +1,1 @@
+"""Transfer-alignment filter: slave strapdown plus error-state Kalman filter."""

@@ -1,0 +1,26 @@
+from setuptools import find_packages, setup
+
+package_name = 'alignment_ros'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='Transfer alignment testbed',
+    maintainer_email='dev@transfer-alignment.invalid',
+    description='Shared rclpy glue: topics, QoS, message conversions, sim clock, parameters; recorder, player and echo.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'recorder = alignment_ros.recorder:main',
+            'player = alignment_ros.player:main',
+            'echo = alignment_ros.echo:main'
+        ],
+    },
+)

@@ -1,0 +1,1 @@
+"""Laser Doppler velocimeter: aircraft velocity relative to the deck."""

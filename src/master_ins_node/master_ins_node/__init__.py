@@ -1,0 +1,1 @@
+"""Ship master INS solution: truth plus a master INS error model."""

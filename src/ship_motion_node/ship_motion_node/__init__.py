@@ -1,0 +1,1 @@
+"""Ship six-DOF motion truth and the simulation clock."""

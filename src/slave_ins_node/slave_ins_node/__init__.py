@@ -1,0 +1,1 @@
+"""Aircraft slave IMU at the deck spot: lever arm, misalignment, catapult, sensor errors; truth."""
