@@ -1,0 +1,105 @@
+"""WGS-84 Earth model in the local-level East-North-Up navigation frame.
+
+Radii, normal gravity (Somigliana with the free-air height term), Earth rate and transport
+rate, and the geodetic <-> ECEF <-> local tangent-plane conversions used for world poses.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+A = 6378137.0                      # semi-major axis, m
+F = 1.0 / 298.257223563            # flattening
+E2 = F * (2.0 - F)                 # first eccentricity squared
+OMEGA_IE = 7.292115e-5             # Earth rotation rate, rad/s
+GM = 3.986004418e14                # m^3/s^2
+G_EQUATOR = 9.7803253359           # normal gravity on the equator, m/s^2
+K_SOMIGLIANA = 0.00193185265241
+B = A * (1.0 - F)
+M_RATIO = OMEGA_IE**2 * A**2 * B / GM
+
+
+def radii(lat: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Meridian (R_M) and transverse (R_N) radii of curvature at latitude `lat` (rad)."""
+    s2 = np.sin(lat) ** 2
+    den = 1.0 - E2 * s2
+    r_n = A / np.sqrt(den)
+    r_m = A * (1.0 - E2) / den**1.5
+    return r_m, r_n
+
+
+def gravity(lat: float | np.ndarray, h: float | np.ndarray) -> np.ndarray:
+    """Normal gravity magnitude (m/s^2) at latitude `lat` (rad) and height `h` (m)."""
+    s2 = np.sin(lat) ** 2
+    g0 = G_EQUATOR * (1.0 + K_SOMIGLIANA * s2) / np.sqrt(1.0 - E2 * s2)
+    return g0 * (1.0 - 2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) * h + 3.0 / A**2 * h**2)
+
+
+def gravity_n(lat, h) -> np.ndarray:
+    """Gravity vector in ENU, shape (..., 3)."""
+    g = np.asarray(gravity(lat, h), dtype=float)
+    out = np.zeros(g.shape + (3,))
+    out[..., 2] = -g
+    return out
+
+
+def omega_ie_n(lat) -> np.ndarray:
+    """Earth rate in ENU, shape (..., 3)."""
+    lat = np.asarray(lat, dtype=float)
+    out = np.zeros(lat.shape + (3,))
+    out[..., 1] = OMEGA_IE * np.cos(lat)
+    out[..., 2] = OMEGA_IE * np.sin(lat)
+    return out
+
+
+def omega_en_n(lat, h, v_n) -> np.ndarray:
+    """Transport rate in ENU for ground velocity `v_n` (..., 3)."""
+    v_n = np.asarray(v_n, dtype=float)
+    r_m, r_n = radii(lat)
+    out = np.empty(v_n.shape)
+    out[..., 0] = -v_n[..., 1] / (r_m + h)
+    out[..., 1] = v_n[..., 0] / (r_n + h)
+    out[..., 2] = v_n[..., 0] * np.tan(lat) / (r_n + h)
+    return out
+
+
+def geodetic_to_ecef(lat, lon, h) -> np.ndarray:
+    """ECEF position (..., 3) of geodetic coordinates (rad, rad, m)."""
+    _, r_n = radii(lat)
+    cl, sl = np.cos(lat), np.sin(lat)
+    return np.stack([(r_n + h) * cl * np.cos(lon), (r_n + h) * cl * np.sin(lon),
+                     (r_n * (1.0 - E2) + h) * sl], axis=-1)
+
+
+def ecef_to_geodetic(p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Geodetic (lat, lon, h) of ECEF points (..., 3); iterative, exact to < 1e-9 m."""
+    p = np.asarray(p, dtype=float)
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    lon = np.arctan2(y, x)
+    rho = np.hypot(x, y)
+    lat = np.arctan2(z, rho * (1.0 - E2))
+    h = np.zeros_like(rho)
+    for _ in range(8):
+        _, r_n = radii(lat)
+        h = rho / np.cos(lat) - r_n
+        lat = np.arctan2(z, rho * (1.0 - E2 * r_n / (r_n + h)))
+    return lat, lon, h
+
+
+def c_ecef_to_enu(lat, lon) -> np.ndarray:
+    """Rotation matrix (3, 3) from ECEF to the ENU frame at (lat, lon)."""
+    sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
+    return np.array([[-so, co, 0.0], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]])
+
+
+class TangentPlane:
+    """Local ENU tangent plane at a fixed origin: the `world` frame of the poses we publish."""
+
+    def __init__(self, lat0: float, lon0: float, h0: float = 0.0) -> None:
+        self.origin = geodetic_to_ecef(lat0, lon0, h0)
+        self.c = c_ecef_to_enu(lat0, lon0)
+
+    def from_geodetic(self, lat, lon, h) -> np.ndarray:
+        return (geodetic_to_ecef(lat, lon, h) - self.origin) @ self.c.T
+
+    def to_geodetic(self, enu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return ecef_to_geodetic(np.asarray(enu) @ self.c + self.origin)

@@ -1,0 +1,1 @@
+"""Kalman filters sharing one small interface: predict, update, x, P, diagnostics."""

@@ -1,0 +1,1 @@
+"""Error-state models for transfer alignment (state labels, F, G, H, Q, R)."""

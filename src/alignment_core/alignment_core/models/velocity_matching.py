@@ -1,0 +1,54 @@
+"""12-state velocity-matching error model: phi (3), dV (3), gyro bias eps (3), accel bias (3).
+
+Nav frame ENU, attitude error C_est = (I - [phi x]) C_true, dV = V_est - V_true; biases are
+the residuals of the body-frame sensor biases after compensation (random constants with an
+optional random walk). Continuous model (Titterton & Weston 10; PSINS):
+  phi'  = -[w_in x] phi - C_b^n eps                     + w_g
+  dV'   = [f^n x] phi - [(2 w_ie + w_en) x] dV + C_b^n nabla + w_a
+Discretised over h as Phi = I + F h + (F h)^2 / 2 and Qd = G Qc G^T h.
+Measurement: z = V_slave - (V_master + C_m^n (w_m x r) + C_m^n v_LDV) = dV + v, H = [0 I 0 0].
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..attitude import skew
+
+LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dV_U', 'eps_x', 'eps_y', 'eps_z',
+          'nabla_x', 'nabla_y', 'nabla_z')
+N = 12
+H = np.hstack([np.zeros((3, 3)), np.eye(3), np.zeros((3, 6))])
+
+
+@dataclass(frozen=True)
+class NoiseDensities:
+    """Continuous white-noise densities: arw rad/sqrt(s), vrw m/s/sqrt(s), bias random walks."""
+    arw: float
+    vrw: float
+    gyro_bias_rw: float
+    accel_bias_rw: float
+
+
+def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray,
+               h: float) -> np.ndarray:
+    """Phi (12, 12) over an interval h, from the mean attitude, specific force and rates."""
+    f = np.zeros((N, N))
+    f[0:3, 0:3] = -skew(w_ie + w_en)
+    f[0:3, 6:9] = -c_nb
+    f[3:6, 0:3] = skew(f_n)
+    f[3:6, 3:6] = -skew(2.0 * w_ie + w_en)
+    f[3:6, 9:12] = c_nb
+    fh = f * h
+    return np.eye(N) + fh + 0.5 * (fh @ fh)
+
+
+def process_noise(c_nb: np.ndarray, q: NoiseDensities, h: float) -> np.ndarray:
+    """Qd (12, 12) = G Qc G^T h with G mapping body-frame sensor noise through C_b^n."""
+    qd = np.zeros((N, N))
+    qd[0:3, 0:3] = (q.arw**2 * h) * (c_nb @ c_nb.T)
+    qd[3:6, 3:6] = (q.vrw**2 * h) * (c_nb @ c_nb.T)
+    qd[6:9, 6:9] = np.eye(3) * (q.gyro_bias_rw**2 * h)
+    qd[9:12, 9:12] = np.eye(3) * (q.accel_bias_rw**2 * h)
+    return qd

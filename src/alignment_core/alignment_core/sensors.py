@@ -1,0 +1,135 @@
+"""Sensor error models: slave IMU, master INS, laser Doppler velocimeter.
+
+Slave IMU: random-constant gyro and accelerometer biases (1-sigma per axis, drawn once from
+the seed), angle and velocity random walk added to the integrated increments, output as
+mean rate and mean specific force over each interval (increment / interval).
+
+Master INS: a ship INS in steady state (damped by log/GNSS for hours) has its tilt balancing
+its accelerometer bias and its heading at the gyrocompass equilibrium, so its velocity error
+does not grow: phi_E = -bias_N/g, phi_N = bias_E/g, phi_U = (Omega_U phi_N - eps_E)/Omega_N
+(biases resolved in the nav frame at the start); plus white velocity noise and the gyro bias
+on its body rate. Attitude convention: C_est = (I - [phi x]) C_true.
+
+LDV: aircraft velocity relative to the deck in ship axes plus white noise; no measurement
+(valid = False) once the aircraft has left the deck.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from . import earth
+from .attitude import DPH, G0
+from .config import require
+from .rng import stage_rng
+from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
+
+UG = 1e-6 * G0
+
+
+@dataclass(frozen=True)
+class ImuConfig:
+    """Slave IMU grade (defaults: seed 000's slave, 0.01 deg/h and 100 ug, 1-sigma per axis)."""
+    gyro_bias_dph: float = 0.01
+    accel_bias_ug: float = 100.0
+    arw_dpsh: float = 0.001           # angle random walk, deg/sqrt(h)
+    vrw_ugpshz: float = 10.0          # velocity random walk, ug/sqrt(Hz)
+
+    def validate(self) -> None:
+        for k in ('gyro_bias_dph', 'accel_bias_ug', 'arw_dpsh', 'vrw_ugpshz'):
+            v = getattr(self, k)
+            require(0.0 <= v <= 1e6, f"{k} must be >= 0, got {v}")
+
+    @property
+    def arw(self) -> float:
+        """Angle random walk, rad/sqrt(s)."""
+        return self.arw_dpsh * np.pi / 180.0 / 60.0
+
+    @property
+    def vrw(self) -> float:
+        """Velocity random walk, (m/s)/sqrt(s)."""
+        return self.vrw_ugpshz * UG
+
+
+class ImuErrorModel:
+    """Adds the slave IMU's errors to ideal increments, sample by sample (deterministic)."""
+
+    def __init__(self, cfg: ImuConfig, seed: int) -> None:
+        self.cfg = cfg
+        self.rng = stage_rng(seed, 'slave_imu')
+        self.gyro_bias = self.rng.standard_normal(3) * cfg.gyro_bias_dph * DPH
+        self.accel_bias = self.rng.standard_normal(3) * cfg.accel_bias_ug * UG
+
+    def measure(self, t_ns: int, dtheta: np.ndarray, dv: np.ndarray, h: float) -> ImuSample:
+        n = self.rng.standard_normal(6)
+        sh = np.sqrt(h)
+        dth = dtheta + self.gyro_bias * h + n[:3] * self.cfg.arw * sh
+        dvv = dv + self.accel_bias * h + n[3:] * self.cfg.vrw * sh
+        return ImuSample(t_ns=t_ns, gyro=dth / h, accel=dvv / h)
+
+
+@dataclass(frozen=True)
+class MasterConfig:
+    """Master ship INS grade (defaults: seed 000, 0.001 deg/h and 50 ug, 1-sigma per axis)."""
+    gyro_bias_dph: float = 0.001
+    accel_bias_ug: float = 50.0
+    velocity_noise_mps: float = 0.001
+
+    def validate(self) -> None:
+        for k in ('gyro_bias_dph', 'accel_bias_ug', 'velocity_noise_mps'):
+            require(getattr(self, k) >= 0.0, f"{k} must be >= 0, got {getattr(self, k)}")
+
+
+class MasterInsModel:
+    """Master INS solution = ship truth + steady-state INS errors."""
+
+    def __init__(self, cfg: MasterConfig, seed: int, lat: float) -> None:
+        self.cfg = cfg
+        self.rng = stage_rng(seed, 'master_ins')
+        eps = self.rng.standard_normal(3) * cfg.gyro_bias_dph * DPH        # nav axes
+        nab = self.rng.standard_normal(3) * cfg.accel_bias_ug * UG
+        g = float(earth.gravity(lat, 0.0))
+        w_ie = earth.omega_ie_n(lat)
+        phi_e = -nab[1] / g
+        phi_n = nab[0] / g
+        phi_u = (w_ie[2] * phi_n - eps[0]) / w_ie[1]
+        self.phi = np.array([phi_e, phi_n, phi_u])
+        self.err_rot = Rotation.from_rotvec(-self.phi)                    # C_est = exp(-phi) C
+        self.gyro_bias_b = self.rng.standard_normal(3) * cfg.gyro_bias_dph * DPH
+
+    def measure(self, s: ShipSample) -> MasterSample:
+        c_true = Rotation.from_quat(s.q_nb)
+        v_n = c_true.apply(s.v_b) + self.rng.standard_normal(3) * self.cfg.velocity_noise_mps
+        c_est = self.err_rot * c_true
+        return MasterSample(t_ns=s.t_ns, p_w=s.p_w.copy(), q_nb=c_est.as_quat(),
+                            v_b=c_est.inv().apply(v_n), w_b=s.w_b + self.gyro_bias_b)
+
+
+@dataclass(frozen=True)
+class LdvConfig:
+    """Laser Doppler velocimeter (seed 000: 0.01 m/s)."""
+    noise_mps: float = 0.01
+
+    def validate(self) -> None:
+        require(0.0 < self.noise_mps <= 10.0, f"noise_mps must be in (0, 10], got {self.noise_mps}")
+
+
+class LdvModel:
+    """Relative velocity of the aircraft w.r.t. the deck, from ship and aircraft truth."""
+
+    def __init__(self, cfg: LdvConfig, seed: int) -> None:
+        self.cfg = cfg
+        self.rng = stage_rng(seed, 'ldv')
+
+    def measure(self, s: ShipSample, a: AircraftTruth) -> LdvSample:
+        n = self.rng.standard_normal(3) * self.cfg.noise_mps
+        if not a.on_deck:
+            return LdvSample(t_ns=s.t_ns, v_s=np.zeros(3), sigma=self.cfg.noise_mps, valid=False)
+        c_ns = Rotation.from_quat(s.q_nb).inv()                            # C_n^s
+        r = c_ns.apply(a.p_w - s.p_w)
+        v_a_n = Rotation.from_quat(a.q_nb).apply(a.v_b)
+        v_s_n = Rotation.from_quat(s.q_nb).apply(s.v_b)
+        v_rel = c_ns.apply(v_a_n - v_s_n) - np.cross(s.w_b, r)
+        return LdvSample(t_ns=s.t_ns, v_s=v_rel + n, sigma=self.cfg.noise_mps, valid=True)
