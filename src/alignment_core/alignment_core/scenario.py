@@ -107,13 +107,17 @@ def from_dict(data: dict, overrides: dict[str, object] | None = None) -> Scenari
     data = copy.deepcopy(data) if data else {}
     for k, v in (overrides or {}).items():
         _set_dotted(data, k, v)
-    # the filter knows the surveyed deck spot unless told otherwise
+    # the filter and the LDV know the surveyed deck spot unless told otherwise
     ac = data.get('aircraft') or {}
     if 'lever_arm_m' in ac:
         data.setdefault('filter', {})
         if data['filter'] is None:
             data['filter'] = {}
         data['filter'].setdefault('lever_arm_m', ac['lever_arm_m'])
+        data.setdefault('ldv', {})
+        if data['ldv'] is None:
+            data['ldv'] = {}
+        data['ldv'].setdefault('origin_m', ac['lever_arm_m'])
     return build(Scenario, data)
 
 
@@ -135,3 +139,8 @@ def load(name_or_path: str, overrides: dict[str, object] | None = None,
 
 def dump(sc: Scenario) -> str:
     return yaml.safe_dump(to_dict(sc), sort_keys=False)
+
+
+def build_scenario(data: dict) -> Scenario:
+    """Validate a complete nested dict (no defaulting of the filter's lever arm)."""
+    return build(Scenario, data)

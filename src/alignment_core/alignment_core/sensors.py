@@ -11,7 +11,7 @@ does not grow: phi_E = -bias_N/g, phi_N = bias_E/g, phi_U = (Omega_U phi_N - eps
 on its body rate. Attitude convention: C_est = (I - [phi x]) C_true.
 
 LDV: aircraft velocity relative to the deck in ship axes plus white noise; no measurement
-(valid = False) once the aircraft has left the deck.
+(valid = False) when the aircraft is outside the beam along the catapult track.
 """
 from __future__ import annotations
 
@@ -109,11 +109,18 @@ class MasterInsModel:
 
 @dataclass(frozen=True)
 class LdvConfig:
-    """Laser Doppler velocimeter (seed 000: 0.01 m/s)."""
+    """Laser Doppler velocimeter (seed 000: 0.01 m/s). Its beam runs along the catapult track
+    (ship x axis) from `origin_m` (the aircraft's start spot, ship axes); it measures while the
+    aircraft is within `track_length_m` along the track and `beam_halfwidth_m` across it."""
     noise_mps: float = 0.01
+    origin_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
+    track_length_m: float = 95.0
+    beam_halfwidth_m: float = 2.0
 
     def validate(self) -> None:
         require(0.0 < self.noise_mps <= 10.0, f"noise_mps must be in (0, 10], got {self.noise_mps}")
+        require(self.track_length_m > 0.0, f"track_length_m must be > 0, got {self.track_length_m}")
+        require(self.beam_halfwidth_m > 0.0, f"beam_halfwidth_m must be > 0, got {self.beam_halfwidth_m}")
 
 
 class LdvModel:
@@ -125,10 +132,12 @@ class LdvModel:
 
     def measure(self, s: ShipSample, a: AircraftTruth) -> LdvSample:
         n = self.rng.standard_normal(3) * self.cfg.noise_mps
-        if not a.on_deck:
-            return LdvSample(t_ns=s.t_ns, v_s=np.zeros(3), sigma=self.cfg.noise_mps, valid=False)
         c_ns = Rotation.from_quat(s.q_nb).inv()                            # C_n^s
         r = c_ns.apply(a.p_w - s.p_w)
+        d = r - np.asarray(self.cfg.origin_m)
+        if not (-self.cfg.beam_halfwidth_m <= d[0] <= self.cfg.track_length_m
+                and np.hypot(d[1], d[2]) <= self.cfg.beam_halfwidth_m):
+            return LdvSample(t_ns=s.t_ns, v_s=np.zeros(3), sigma=self.cfg.noise_mps, valid=False)
         v_a_n = Rotation.from_quat(a.q_nb).apply(a.v_b)
         v_s_n = Rotation.from_quat(s.q_nb).apply(s.v_b)
         v_rel = c_ns.apply(v_a_n - v_s_n) - np.cross(s.w_b, r)

@@ -1,0 +1,91 @@
+"""alignment_filter_node: aligns the aircraft INS to the master INS (never reads truth).
+
+Inputs are queued and processed in stamp order by alignment_core's TransferAlignment, so
+its outputs do not depend on how the three streams interleave on arrival.
+"""
+from __future__ import annotations
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped, Vector3Stamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import Imu
+from std_msgs.msg import Float64MultiArray
+
+from alignment_core import pipeline
+from alignment_core.models.velocity_matching import LABELS
+from alignment_core.transfer_alignment import TransferAlignment
+from alignment_ros import convert, node_util, qos, topics
+from alignment_ros.params import ScenarioParameters
+
+
+class AlignmentFilterNode(node_util.CountingNode):
+    def __init__(self) -> None:
+        super().__init__('alignment_filter_node')
+        self.sc = ScenarioParameters(self).scenario
+        self.plane = pipeline.plane_of(self.sc)
+        self.engine = TransferAlignment(self.sc.filter, self.plane, self.sc.rate_hz)
+        self.stream_publisher(Vector3Stamped, topics.ALIGN_MISALIGNMENT)
+        self.stream_publisher(PoseWithCovarianceStamped, topics.ALIGN_ATTITUDE)
+        self.stream_publisher(Float64MultiArray, topics.ALIGN_STATE)
+        self.stream_publisher(DiagnosticArray, topics.DIAGNOSTICS)
+        self.create_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu, qos.STREAM)
+        self.create_subscription(Odometry, topics.MASTER_ODOM, self.on_master, qos.STREAM)
+        self.create_subscription(TwistWithCovarianceStamped, topics.LDV_TWIST, self.on_ldv, qos.STREAM)
+        self.n_out = 0
+
+    def on_imu(self, m: Imu) -> None:
+        self._accept(topics.AIRCRAFT_IMU, self.engine.push_imu(convert.msg_to_imu(m)), m)
+
+    def on_master(self, m: Odometry) -> None:
+        self._accept(topics.MASTER_ODOM, self.engine.push_master(convert.msg_to_master(m)), m)
+
+    def on_ldv(self, m: TwistWithCovarianceStamped) -> None:
+        self._accept(topics.LDV_TWIST, self.engine.push_ldv(convert.msg_to_ldv(m)), m)
+
+    def _accept(self, topic: str, ok: bool, m) -> None:
+        self.received[topic] += 1
+        if not ok:
+            self.rejected[topic] += 1
+            self.get_logger().warning(
+                f'rejected {topic} message stamped {convert.to_ns(m.header.stamp)} ns '
+                f'(non-finite or not after the previous stamp); {self.rejected[topic]} so far',
+                throttle_duration_sec=1.0)
+        self._publish(self.engine.process())
+
+    def _publish(self, estimates) -> None:
+        for e in estimates:
+            lat, lon, h = self.engine.ins.s.lat, self.engine.ins.s.lon, self.engine.ins.s.h
+            p_w = self.plane.from_geodetic(lat, lon, h)
+            mis, att, st = convert.estimate_to_msgs(e, LABELS, p_w)
+            self.send(topics.ALIGN_MISALIGNMENT, mis)
+            self.send(topics.ALIGN_ATTITUDE, att)
+            self.send(topics.ALIGN_STATE, st)
+            if self.n_out % 10 == 0:
+                self.send(topics.DIAGNOSTICS, self._diagnostics(e))
+            self.n_out += 1
+
+    def _diagnostics(self, e) -> DiagnosticArray:
+        c = self.engine.counters
+        bad = c.rejected_nonfinite + c.rejected_out_of_order + c.imu_gaps
+        level = DiagnosticStatus.OK if bad == 0 else DiagnosticStatus.WARN
+        msg = 'aligning' if e.matching else 'free inertial (no matching)'
+        return convert.diagnostics(e.t_ns, 'alignment_filter', level, msg, {
+            'nis': f'{e.nis:.4g}', 'updates': c.updates, 'gated': c.gated,
+            'rejected_nonfinite': c.rejected_nonfinite,
+            'rejected_out_of_order': c.rejected_out_of_order, 'imu_gaps': c.imu_gaps,
+            'imu': c.imu, 'master': c.master, 'ldv': c.ldv,
+            'pending': self.engine.merger.pending()})
+
+    def finish(self) -> None:
+        # anything still queued (a stream ended early) is processed in stamp order
+        self._publish(self.engine.process(final=True))
+        self.wait_acked(5.0)
+
+    def stats(self) -> dict:
+        d = super().stats()
+        d['filter'] = {k: v for k, v in vars(self.engine.counters).items() if k != 'extra'}
+        return d
+
+
+def main() -> None:
+    node_util.run(AlignmentFilterNode)

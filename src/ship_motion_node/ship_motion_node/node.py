@@ -1,0 +1,103 @@
+"""ship_motion_node: publishes the ship's six-DOF truth and drives simulation time (/clock)."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from geometry_msgs.msg import AccelStamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import NavSatFix
+
+from alignment_core import pipeline
+from alignment_core.config import ConfigError
+from alignment_ros import convert, node_util, topics
+from alignment_ros.params import ScenarioParameters
+
+
+class ShipMotionNode(node_util.CountingNode):
+    def __init__(self) -> None:
+        super().__init__('ship_motion_node')
+        self.declare_parameter('real_time_factor', 5.0, ParameterDescriptor(
+            description='simulation speed: 1 = real time, 0 = as fast as possible'))
+        self.declare_parameter('wait_subscribers', [''], ParameterDescriptor(
+            description="'topic:count' pairs to wait for before starting (any node's subscriptions)"))
+        self.declare_parameter('wait_timeout_s', 60.0, ParameterDescriptor(
+            description='give up waiting for subscribers after this many wall seconds'))
+        self.declare_parameter('fix_decimation', 10, ParameterDescriptor(
+            description='publish /ship/fix every N samples'))
+        self.add_on_set_parameters_callback(self._check)
+        if self.get_parameter('real_time_factor').value < 0:
+            raise ConfigError('real_time_factor must be >= 0')
+        self.sc = ScenarioParameters(self).scenario
+        self.source = pipeline.ship_source(self.sc)
+        self.plane = pipeline.plane_of(self.sc)
+        self.clock_pub = self.stream_publisher(Clock, topics.CLOCK)
+        self.stream_publisher(Odometry, topics.SHIP_ODOM)
+        self.stream_publisher(AccelStamped, topics.SHIP_ACCEL)
+        self.stream_publisher(NavSatFix, topics.SHIP_FIX)
+
+    def _check(self, params) -> SetParametersResult:
+        for p in params:
+            if p.name == 'real_time_factor' and not (p.value >= 0.0):
+                return SetParametersResult(successful=False, reason='real_time_factor must be >= 0')
+            if p.name == 'fix_decimation' and p.value < 1:
+                return SetParametersResult(successful=False, reason='fix_decimation must be >= 1')
+        return SetParametersResult(successful=True)
+
+    def _wait_for_subscribers(self, stop) -> bool:
+        wants = []
+        for item in self.get_parameter('wait_subscribers').value:
+            if item:
+                topic, _, n = item.rpartition(':')
+                wants.append((topic, int(n)))
+        deadline = time.monotonic() + self.get_parameter('wait_timeout_s').value
+        while not stop():
+            missing = [(t, n) for t, n in wants if self.count_subscribers(t) < n]
+            if not missing:
+                time.sleep(0.5)   # let the matched endpoints finish their handshakes
+                return True
+            if time.monotonic() > deadline:
+                self.get_logger().error(f'timed out waiting for subscribers: {missing}')
+                return False
+            time.sleep(0.05)
+        return False
+
+    def run(self, stop) -> None:
+        import rclpy
+        if not self._wait_for_subscribers(stop):
+            return
+        sc = self.sc
+        rtf = self.get_parameter('real_time_factor').value
+        dec = self.get_parameter('fix_decimation').value
+        wall0 = time.monotonic()
+        self.get_logger().info(f'scenario {sc.name}: {sc.duration_s} s at {sc.rate_hz} Hz, '
+                               f'real-time factor {rtf}')
+        for k in range(sc.n_samples):
+            if stop():
+                break
+            tau = (k * sc.dt_ns) / 1e9
+            s = self.source.samples(np.array([tau]), sc.t0_ns, sc.dt_ns, k0=k)[0]
+            clk = Clock()
+            clk.clock = convert.stamp(s.t_ns)
+            self.send(topics.CLOCK, clk)
+            odom, acc = convert.ship_to_msgs(s)
+            self.send(topics.SHIP_ODOM, odom)
+            self.send(topics.SHIP_ACCEL, acc)
+            if k % dec == 0:
+                lat, lon, h = self.plane.to_geodetic(s.p_w)
+                self.send(topics.SHIP_FIX, convert.navsatfix(s.t_ns, topics.FRAME_SHIP, lat, lon, h))
+            rtf = self.get_parameter('real_time_factor').value
+            if rtf > 0:
+                lag = wall0 + tau / rtf - time.monotonic()
+                if lag > 0:
+                    time.sleep(lag)
+            if k % 50 == 0:
+                rclpy.spin_once(self, timeout_sec=0.0)
+        self.wait_acked(30.0)
+        self.get_logger().info(f'done: {dict(self.published)}')
+
+
+def main() -> None:
+    node_util.run(ShipMotionNode, spin=False)
