@@ -177,10 +177,10 @@ def estimate_to_msgs(e: Estimate, labels: tuple[str, ...], p_w
     return mis, att, st
 
 
-def diagnostics(t_ns: int, name: str, level: int, message: str, values: dict) -> DiagnosticArray:
+def diagnostics(t_ns: int, name: str, level: bytes, message: str, values: dict) -> DiagnosticArray:
     d = DiagnosticArray()
     d.header.stamp = stamp(t_ns)
-    s = DiagnosticStatus(level=bytes([level]), name=name, message=message, hardware_id=name)
+    s = DiagnosticStatus(level=level, name=name, message=message, hardware_id=name)
     s.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
     d.status = [s]
     return d

@@ -1,0 +1,152 @@
+"""Run the whole node graph for a scenario: recorder, filter, LDV, slave, master, ship.
+
+Each node is a separate process started through scripts/start_node.sh with one params file
+written from the scenario; the ship node starts the clock once every subscription is
+matched; the recorder stops when every stream has reached the scenario's end; then all
+nodes get SIGINT, and the summary is computed from the bag.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import yaml
+
+from alignment_core import scenario as core_scenario
+from alignment_core.config import ConfigError
+
+from . import summary, topics
+from .params import flat_scenario
+
+NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node')
+WAIT_SUBSCRIBERS = [  # topic:count, recorder included
+    f'{topics.SHIP_ODOM}:4', f'{topics.SHIP_ACCEL}:2', f'{topics.MASTER_ODOM}:2',
+    f'{topics.AIRCRAFT_IMU}:2', f'{topics.LDV_TWIST}:2', f'{topics.TRUTH_AIRCRAFT_ODOM}:2',
+    f'{topics.TRUTH_MISALIGNMENT}:1', f'{topics.ALIGN_MISALIGNMENT}:1', f'{topics.ALIGN_STATE}:1',
+    f'{topics.CLOCK}:1']
+END_TOPICS = (topics.SHIP_ODOM, topics.MASTER_ODOM, topics.AIRCRAFT_IMU, topics.LDV_TWIST,
+              topics.TRUTH_AIRCRAFT_ODOM, topics.ALIGN_MISALIGNMENT)
+
+
+def root() -> Path:
+    return Path(os.environ.get('ALIGN_ROOT', Path(__file__).resolve().parents[3]))
+
+
+def write_params(sc: core_scenario.Scenario, path: Path, extra: dict | None = None) -> None:
+    params = flat_scenario(sc)
+    params.update(extra or {})
+    path.write_text(yaml.safe_dump({'/**': {'ros__parameters': params}}, sort_keys=False))
+
+
+def start(name: str, params: Path, out: Path, *args: str) -> subprocess.Popen:
+    log = open(out / 'logs' / f'{name}.log', 'w')
+    cmd = [str(root() / 'scripts' / 'start_node.sh'), name, '--params-file', str(params),
+           '--ros-args', '-p', f'stats_path:={out / "stats" / (name + ".json")}', *args]
+    return subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+
+
+def start_recorder(out: Path, bag: Path, end_time_s: float, topic_list, wait_topics,
+                   name: str = 'recorder') -> subprocess.Popen:
+    cmd = [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/recorder'),
+           '--out', str(bag), '--end-time', repr(end_time_s), '--stats',
+           str(out / 'stats' / f'{name}.json'), '--topics', *topic_list,
+           '--wait-topics', *wait_topics]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=open(out / 'logs' / f'{name}.log', 'w'),
+                         text=True, start_new_session=True)
+    deadline = time.monotonic() + 60
+    for line in p.stdout:
+        if 'ready' in line:
+            return p
+        if time.monotonic() > deadline:
+            break
+    raise RuntimeError(f'{name} did not become ready; see {out}/logs/{name}.log')
+
+
+def stop(procs: dict[str, subprocess.Popen], timeout: float = 15.0) -> None:
+    for p in procs.values():
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGINT)
+    deadline = time.monotonic() + timeout
+    for name, p in procs.items():
+        try:
+            p.wait(max(0.1, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            print(f'warning: {name} did not stop in time and was killed', file=sys.stderr)
+
+
+def published_counts(out: Path) -> dict[str, int]:
+    pub: dict[str, int] = {}
+    for f in sorted((out / 'stats').glob('*_node.json')):
+        for k, v in json.loads(f.read_text()).get('published', {}).items():
+            pub[k] = pub.get(k, 0) + v
+    return pub
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog='run_graph.sh', description=__doc__)
+    ap.add_argument('--scenario', default='catapult')
+    ap.add_argument('--out', type=Path, default=None)
+    ap.add_argument('--seed', type=int, default=None)
+    ap.add_argument('--set', dest='sets', action='append', default=[], metavar='KEY=VALUE')
+    ap.add_argument('--real-time-factor', type=float, default=5.0)
+    ap.add_argument('--timeout', type=float, default=None, help='wall seconds before giving up')
+    a = ap.parse_args(argv)
+    try:
+        sc = core_scenario.load(a.scenario, core_scenario.parse_overrides(a.sets), a.seed)
+    except ConfigError as e:
+        print(f'run_graph: {e}', file=sys.stderr)
+        return 2
+    out = a.out or root() / 'runs' / time.strftime(f'{sc.name}-%Y%m%d-%H%M%S')
+    if (out / 'bag').exists():
+        print(f'run_graph: {out}/bag already exists; choose another --out', file=sys.stderr)
+        return 2
+    for d in ('logs', 'stats'):
+        (out / d).mkdir(parents=True, exist_ok=True)
+    (out / 'scenario.yaml').write_text(core_scenario.dump(sc))
+    params = out / 'params.yaml'
+    write_params(sc, params)
+    end_s = sc.start_time_s + sc.duration_s
+    procs: dict[str, subprocess.Popen] = {}
+    wall0 = time.monotonic()
+    try:
+        procs['recorder'] = start_recorder(out, out / 'bag', end_s, list(topics.TOPIC_TYPES), END_TOPICS)
+        for n in NODES:
+            procs[n] = start(n, params, out)
+        procs['ship_motion_node'] = start(
+            'ship_motion_node', params, out, '-p', f'real_time_factor:={a.real_time_factor}',
+            '-p', 'wait_subscribers:=[' + ','.join(f'"{w}"' for w in WAIT_SUBSCRIBERS) + ']')
+        timeout = a.timeout or 120.0 + 3.0 * sc.duration_s
+        deadline = time.monotonic() + timeout
+        while procs['recorder'].poll() is None:
+            for n, p in procs.items():
+                if n != 'recorder' and p.poll() not in (None, 0):
+                    raise RuntimeError(f'{n} exited with {p.returncode}; see {out}/logs/{n}.log')
+            if time.monotonic() > deadline:
+                raise RuntimeError(f'run did not finish within {timeout:.0f} s')
+            time.sleep(0.2)
+        wall = time.monotonic() - wall0
+    except RuntimeError as e:
+        print(f'run_graph: {e}', file=sys.stderr)
+        stop(procs)
+        return 1
+    finally:
+        pass
+    stop(procs)
+    s = summary.summarise(out / 'bag', out / 'bag', sc.duration_s, wall, published_counts(out))
+    s['scenario'] = sc.name
+    s['seed'] = sc.seed
+    summary.write(s, out)
+    print(summary.table(s))
+    print(f'output: {out}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
