@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Replay a recorded bag's sensor topics into a fresh alignment filter and record its outputs.
+#   scripts/replay.sh BAG [--out DIR] [--params-file F]
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+"$ROOT/scripts/setup.sh"
+. "$ROOT/scripts/env.sh"
+exec python -m alignment_ros.replay "$@"

@@ -1,0 +1,97 @@
+"""Replay a recorded run's sensor topics (and /clock) into a fresh alignment filter node,
+record its outputs to a new bag, and write the same summary.json as run_graph."""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import rclpy
+
+from . import summary, topics
+from .bag import BagError, BagReader
+from .graph import root, start, start_recorder, stop
+from .topics import SENSOR_TOPICS
+
+
+def _wait_graph(timeout_s: float = 30.0) -> None:
+    """Block until the filter's subscriptions and output publishers are visible."""
+    rclpy.init()
+    node = rclpy.create_node('replay_wait')
+    try:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if (node.count_subscribers(topics.AIRCRAFT_IMU) >= 1
+                    and node.count_publishers(topics.ALIGN_MISALIGNMENT) >= 1):
+                time.sleep(1.0)
+                return
+            time.sleep(0.05)
+        raise RuntimeError('the filter node did not come up')
+    finally:
+        node.destroy_node()
+        rclpy.shutdown()
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog='replay.sh', description=__doc__)
+    ap.add_argument('bag', type=Path, help='a bag recorded by run_graph.sh (its run directory or bag/)')
+    ap.add_argument('--out', type=Path, default=None)
+    ap.add_argument('--params-file', type=Path, default=None,
+                    help="filter parameters (default: the run's params.yaml next to the bag)")
+    a = ap.parse_args(argv)
+    bag = a.bag / 'bag' if (a.bag / 'bag').is_dir() else a.bag
+    params = a.params_file or bag.parent / 'params.yaml'
+    if not params.exists():
+        print(f'replay: no parameters at {params}; pass --params-file', file=sys.stderr)
+        return 2
+    try:
+        reader = BagReader(bag)
+        end_ns = max(m.t_ns for m in reader.messages([topics.MASTER_ODOM]))
+    except (BagError, ValueError) as e:
+        print(f'replay: {e}', file=sys.stderr)
+        return 2
+    out = a.out or root() / 'runs' / time.strftime('replay-%Y%m%d-%H%M%S')
+    if (out / 'bag').exists():
+        print(f'replay: {out}/bag already exists', file=sys.stderr)
+        return 2
+    for d in ('logs', 'stats'):
+        (out / d).mkdir(parents=True, exist_ok=True)
+    procs: dict[str, subprocess.Popen] = {}
+    wall0 = time.monotonic()
+    try:
+        procs['recorder'] = start_recorder(out, out / 'bag', end_ns * 1e-9,
+                                           list(topics.FILTER_OUTPUT_TOPICS),
+                                           [topics.ALIGN_MISALIGNMENT])
+        procs['alignment_filter_node'] = start('alignment_filter_node', params, out,
+                                                '-p', 'min_output_subscribers:=1')
+        _wait_graph()
+        player = subprocess.run(
+            [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/player'), str(bag),
+             '--topics', *SENSOR_TOPICS, '--stats', str(out / 'stats' / 'player.json'),
+             '--wait-subscribers', f'{topics.AIRCRAFT_IMU}=1', f'{topics.MASTER_ODOM}=1',
+             f'{topics.LDV_TWIST}=1'],
+            stdout=open(out / 'logs' / 'player.log', 'w'), stderr=subprocess.STDOUT)
+        if player.returncode != 0:
+            raise RuntimeError(f'player failed; see {out}/logs/player.log')
+        procs['recorder'].wait(timeout=120)
+    except (RuntimeError, subprocess.TimeoutExpired) as e:
+        print(f'replay: {e}', file=sys.stderr)
+        stop(procs)
+        return 1
+    wall = time.monotonic() - wall0
+    stop(procs)
+    pub = json.loads((out / 'stats' / 'alignment_filter_node.json').read_text())['published']
+    sim = (end_ns - min(m.t_ns for m in BagReader(bag).messages([topics.MASTER_ODOM]))) * 1e-9
+    s = summary.summarise(bag, out / 'bag', sim, wall, pub)
+    s['replayed_from'] = str(bag)
+    summary.write(s, out)
+    print(summary.table(s))
+    print(f'output: {out}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
