@@ -8,7 +8,6 @@ from __future__ import annotations
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
-from rcl_interfaces.msg import ParameterDescriptor
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
@@ -33,10 +32,6 @@ class AlignmentFilterNode(node_util.CountingNode):
         self.create_subscription(Odometry, topics.MASTER_ODOM, self.on_master, qos.STREAM)
         self.create_subscription(TwistWithCovarianceStamped, topics.LDV_TWIST, self.on_ldv, qos.STREAM)
         self.n_out = 0
-        self.declare_parameter('min_output_subscribers', 0, ParameterDescriptor(
-            description='hold outputs until /alignment/misalignment has this many matched '
-                        'subscriptions (a recorder), so none is published into the void'))
-        self.held: list = []
 
     def on_imu(self, m: Imu) -> None:
         self._accept(topics.AIRCRAFT_IMU, self.engine.push_imu(convert.msg_to_imu(m)), m)
@@ -58,11 +53,6 @@ class AlignmentFilterNode(node_util.CountingNode):
         self._publish(self.engine.process())
 
     def _publish(self, estimates) -> None:
-        self.held.extend(estimates)
-        need = self.get_parameter('min_output_subscribers').value
-        if need > 0 and self._pubs[topics.ALIGN_MISALIGNMENT].get_subscription_count() < need:
-            return
-        estimates, self.held = self.held, []
         for e in estimates:
             lat, lon, h = self.engine.ins.s.lat, self.engine.ins.s.lon, self.engine.ins.s.h
             p_w = self.plane.from_geodetic(lat, lon, h)

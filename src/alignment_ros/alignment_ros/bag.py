@@ -321,7 +321,14 @@ class BagReader:
 
     def _open(self, f: Path) -> None:
         with f.open('rb') as fh:
-            if fh.read(8) != MCAP_MAGIC:
+            magic = fh.read(8)
+            if magic != MCAP_MAGIC:
+                if MCAP_MAGIC.startswith(magic):  # cut before the end of the magic: empty
+                    self.truncated = True
+                    self._salvaged[f] = _Salvage(b'')
+                    log.warning('%s: truncated MCAP file (%d bytes): no message readable',
+                                f, len(magic))
+                    return
                 raise BagError(f'{f}: not an MCAP file (bad magic)')
             try:
                 fh.seek(0)
@@ -331,7 +338,7 @@ class BagReader:
                 self._summaries[f] = summary
                 return
             except (McapError, OSError, ValueError, struct.error) as exc:
-                reason = str(exc) or type(exc).__name__
+                reason = f'no valid footer/summary: {type(exc).__name__}'
         sal = _Salvage(f.read_bytes())
         sal.scan(8, len(sal.buf))
         self._salvaged[f] = sal

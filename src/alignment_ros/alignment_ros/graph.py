@@ -24,12 +24,19 @@ from alignment_core.config import ConfigError
 from . import summary, topics
 from .params import flat_scenario
 
+# matched subscriptions (recorder included) each node waits for before it sends on a topic
+MATCHED = {
+    'ship_motion_node': {topics.CLOCK: 1, topics.SHIP_ODOM: 4, topics.SHIP_ACCEL: 2, topics.SHIP_FIX: 1},
+    'master_ins_node': {topics.MASTER_ODOM: 2, topics.MASTER_FIX: 1},
+    'slave_ins_node': {topics.AIRCRAFT_IMU: 2, topics.TRUTH_AIRCRAFT_ODOM: 2, topics.TRUTH_MISALIGNMENT: 1},
+    'ldv_node': {topics.LDV_TWIST: 2},
+    'alignment_filter_node': {t: 1 for t in topics.FILTER_OUTPUT_TOPICS},
+}
 NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node')
-WAIT_SUBSCRIBERS = [  # topic:count, recorder included
-    f'{topics.SHIP_ODOM}:4', f'{topics.SHIP_ACCEL}:2', f'{topics.MASTER_ODOM}:2',
-    f'{topics.AIRCRAFT_IMU}:2', f'{topics.LDV_TWIST}:2', f'{topics.TRUTH_AIRCRAFT_ODOM}:2',
-    f'{topics.TRUTH_MISALIGNMENT}:1', f'{topics.ALIGN_MISALIGNMENT}:1', f'{topics.ALIGN_STATE}:1',
-    f'{topics.CLOCK}:1']
+
+
+def _list_param(name: str, items: dict[str, int]) -> str:
+    return f'{name}:=[' + ','.join(f'"{t}:{n}"' for t, n in items.items()) + ']'
 END_TOPICS = (topics.SHIP_ODOM, topics.MASTER_ODOM, topics.AIRCRAFT_IMU, topics.LDV_TWIST,
               topics.TRUTH_AIRCRAFT_ODOM, topics.ALIGN_MISALIGNMENT)
 
@@ -48,6 +55,8 @@ def start(name: str, params: Path, out: Path, *args: str) -> subprocess.Popen:
     log = open(out / 'logs' / f'{name}.log', 'w')
     cmd = [str(root() / 'scripts' / 'start_node.sh'), name, '--params-file', str(params),
            '--ros-args', '-p', f'stats_path:={out / "stats" / (name + ".json")}', *args]
+    if name in MATCHED and not any('hold_until_matched' in x for x in args):
+        cmd += ['-p', _list_param('hold_until_matched', MATCHED[name])]
     return subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
 
 
@@ -121,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
             procs[n] = start(n, params, out)
         procs['ship_motion_node'] = start(
             'ship_motion_node', params, out, '-p', f'real_time_factor:={a.real_time_factor}',
-            '-p', 'wait_subscribers:=[' + ','.join(f'"{w}"' for w in WAIT_SUBSCRIBERS) + ']')
+            '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']))
         timeout = a.timeout or 120.0 + 3.0 * sc.duration_s
         deadline = time.monotonic() + timeout
         while procs['recorder'].poll() is None:

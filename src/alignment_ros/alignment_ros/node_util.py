@@ -27,7 +27,16 @@ class CountingNode(Node):
         self.rejected: Counter = Counter()
         self.declare_parameter('stats_path', '', ParameterDescriptor(
             description='write publish/receive counts here (JSON) at shutdown; empty: do not'))
+        self.declare_parameter('hold_until_matched', [''], ParameterDescriptor(
+            description="'topic:count' pairs: hold this node's messages on topic until its "
+                        "publisher has matched count subscriptions (no message into the void)"))
         self._pubs: dict[str, object] = {}
+        self._need: dict[str, int] = {}
+        for item in self.get_parameter('hold_until_matched').value:
+            if item:
+                topic, _, n = item.rpartition(':')
+                self._need[topic] = int(n)
+        self._held: dict[str, list] = {}
 
     def stream_publisher(self, msg_type, topic: str):
         pub = self.create_publisher(msg_type, topic, qos.STREAM)
@@ -35,8 +44,21 @@ class CountingNode(Node):
         return pub
 
     def send(self, topic: str, msg) -> None:
+        need = self._need.get(topic)
+        if need is not None:
+            if self._pubs[topic].get_subscription_count() < need:
+                self._held.setdefault(topic, []).append(msg)
+                return
+            del self._need[topic]
+            for m in self._held.pop(topic, []):
+                self._pubs[topic].publish(m)
+                self.published[topic] += 1
         self._pubs[topic].publish(msg)
         self.published[topic] += 1
+
+    def held(self) -> dict[str, int]:
+        """Messages still held back because their subscribers never matched."""
+        return {t: len(v) for t, v in self._held.items() if v}
 
     def wait_acked(self, timeout_s: float = 10.0) -> bool:
         ok = True
@@ -49,7 +71,8 @@ class CountingNode(Node):
 
     def stats(self) -> dict:
         return {'node': self.get_name(), 'published': dict(self.published),
-                'received': dict(self.received), 'rejected': dict(self.rejected)}
+                'received': dict(self.received), 'rejected': dict(self.rejected),
+                'held_unsent': self.held()}
 
     def write_stats(self) -> None:
         path = self.get_parameter('stats_path').value

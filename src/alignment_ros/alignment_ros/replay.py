@@ -14,7 +14,9 @@ import rclpy
 from . import summary, topics
 from .bag import BagError, BagReader
 from .graph import root, start, start_recorder, stop
-from .topics import SENSOR_TOPICS
+from .topics import FILTER_OUTPUT_TOPICS, SENSOR_TOPICS
+
+HOLD = 'hold_until_matched:=[' + ','.join(f'"{t}:1"' for t in FILTER_OUTPUT_TOPICS) + ']'
 
 
 def _wait_graph(timeout_s: float = 30.0) -> None:
@@ -66,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
                                            list(topics.FILTER_OUTPUT_TOPICS),
                                            [topics.ALIGN_MISALIGNMENT])
         procs['alignment_filter_node'] = start('alignment_filter_node', params, out,
-                                                '-p', 'min_output_subscribers:=1')
+                                                '-p', HOLD)
         _wait_graph()
         player = subprocess.run(
             [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/player'), str(bag),

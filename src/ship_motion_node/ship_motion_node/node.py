@@ -22,7 +22,8 @@ class ShipMotionNode(node_util.CountingNode):
         self.declare_parameter('real_time_factor', 5.0, ParameterDescriptor(
             description='simulation speed: 1 = real time, 0 = as fast as possible'))
         self.declare_parameter('wait_subscribers', [''], ParameterDescriptor(
-            description="'topic:count' pairs to wait for before starting (any node's subscriptions)"))
+            description="'topic:count' pairs to wait for before starting: matched subscriptions "
+                        "for this node's own topics, discovered subscriptions for any other"))
         self.declare_parameter('wait_timeout_s', 60.0, ParameterDescriptor(
             description='give up waiting for subscribers after this many wall seconds'))
         self.declare_parameter('fix_decimation', 10, ParameterDescriptor(
@@ -54,7 +55,7 @@ class ShipMotionNode(node_util.CountingNode):
                 wants.append((topic, int(n)))
         deadline = time.monotonic() + self.get_parameter('wait_timeout_s').value
         while not stop():
-            missing = [(t, n) for t, n in wants if self.count_subscribers(t) < n]
+            missing = [(t, n) for t, n in wants if self._subscribers(t) < n]
             if not missing:
                 time.sleep(0.5)   # let the matched endpoints finish their handshakes
                 return True
@@ -63,6 +64,10 @@ class ShipMotionNode(node_util.CountingNode):
                 return False
             time.sleep(0.05)
         return False
+
+    def _subscribers(self, topic: str) -> int:
+        pub = self._pubs.get(topic)
+        return pub.get_subscription_count() if pub is not None else self.count_subscribers(topic)
 
     def run(self, stop) -> None:
         import rclpy

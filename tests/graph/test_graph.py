@@ -1,0 +1,138 @@
+"""Graph integration: a short catapult run through all nodes, its bag, replay, and batch equality."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from alignment_core import pipeline, scenario
+
+ROOT = Path(__file__).resolve().parents[2]
+SETS = ['duration_s=12.0', 'aircraft.catapult.launch_time_s=8.0', 'seed=7']
+
+
+def _env(domain: int) -> dict:
+    env = dict(os.environ)
+    env['ROS_DOMAIN_ID'] = str(domain)
+    return env
+
+
+@pytest.fixture(scope='module')
+def graph_run(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp('graph') / 'run'
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(out)]
+    for s in SETS:
+        cmd += ['--set', s]
+    p = subprocess.run(cmd, env=_env(61 + os.getpid() % 50), capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert 'lost messages: 0' in p.stdout
+    return out
+
+
+@pytest.fixture(scope='module')
+def replay_run(graph_run, tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp('replay') / 'run'
+    p = subprocess.run([str(ROOT / 'scripts/replay.sh'), str(graph_run), '--out', str(out)],
+                       env=_env(120 + os.getpid() % 50), capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stdout + p.stderr
+    return out
+
+
+def _bag_estimates(bag: Path) -> tuple[np.ndarray, np.ndarray]:
+    from alignment_ros.summary import estimates_from_bag
+    e = estimates_from_bag(bag)
+    return e['t_ns'], e['misalignment']
+
+
+def test_summary_has_contract_keys_and_no_losses(graph_run):
+    s = json.loads((graph_run / 'summary.json').read_text())
+    for k in ('misalignment_truth_rad', 'misalignment_estimate_rad', 'misalignment_sigma_rad'):
+        assert len(s[k]) == 3 and all(np.isfinite(s[k]))
+    assert s['sim_time_s'] == pytest.approx(12.0)
+    assert s['wall_time_s'] > 0
+    assert s['lost_total'] == 0
+    for topic, n in s['published'].items():
+        assert s['topics'][topic] == n, topic
+    # every stream of the contract is present; 12 s at 100 Hz -> 1201 ship samples
+    assert s['topics']['/ship/odom'] == 1201
+    assert s['topics']['/aircraft/imu'] == 1200
+    assert s['topics']['/truth/misalignment'] == 1101    # on deck until the release at 11 s
+
+
+def test_bag_reads_with_independent_reader(graph_run):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    bag = graph_run / 'bag'
+    meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert meta['version'] == 9
+    assert meta['storage_identifier'] == 'mcap'
+    files = list(bag.glob('*.mcap'))
+    assert len(files) == 1
+    counts: dict[str, int] = {}
+    first_imu = None
+    with open(files[0], 'rb') as f:
+        for schema, channel, message, decoded in make_reader(
+                f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+            counts[channel.topic] = counts.get(channel.topic, 0) + 1
+            if channel.topic == '/aircraft/imu' and first_imu is None:
+                first_imu = decoded
+                assert schema.encoding == 'ros2msg' and channel.message_encoding == 'cdr'
+    meta_counts = {t['topic_metadata']['name']: t['message_count'] for t in meta['topics_with_message_count']}
+    assert counts == meta_counts
+    # REP-145: no orientation; the two decoders agree on the first IMU message
+    assert first_imu.orientation_covariance[0] == -1.0
+    assert first_imu.header.frame_id == 'aircraft'
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import Imu
+
+    from alignment_ros.bag import read_bag
+    ours = deserialize_message(next(read_bag(bag, ['/aircraft/imu'])).data, Imu)
+    for f in ('x', 'y', 'z'):
+        assert getattr(ours.linear_acceleration, f) == getattr(first_imu.linear_acceleration, f)
+        assert getattr(ours.angular_velocity, f) == getattr(first_imu.angular_velocity, f)
+    # specific force magnitude: g plus the deck's lever-arm and heave accelerations (< 2.5 m/s^2)
+    acc = first_imu.linear_acceleration
+    assert abs(np.hypot(np.hypot(acc.x, acc.y), acc.z) - 9.80) < 2.5
+
+
+def test_graph_equals_batch(graph_run):
+    sc = scenario.load(str(graph_run / 'scenario.yaml'))
+    batch = pipeline.run(sc, keep_truth=False)
+    t_b = np.array([e.t_ns for e in batch.estimates])
+    mu_b = np.array([e.misalignment for e in batch.estimates])
+    t_g, mu_g = _bag_estimates(graph_run / 'bag')
+    assert np.array_equal(t_g, t_b)
+    assert np.max(np.abs(mu_g - mu_b)) < 1e-9
+    s = json.loads((graph_run / 'summary.json').read_text())
+    i = int(np.searchsorted(t_b, round(s['scored_at_s'] * 1e9), side='right')) - 1
+    assert np.max(np.abs(np.array(s['misalignment_estimate_rad']) - mu_b[i])) < 1e-9
+
+
+def test_replay_reproduces_the_estimates(graph_run, replay_run):
+    t_g, mu_g = _bag_estimates(graph_run / 'bag')
+    t_r, mu_r = _bag_estimates(replay_run / 'bag')
+    assert np.array_equal(t_g, t_r)
+    assert np.max(np.abs(mu_g - mu_r)) < 1e-12
+    a = json.loads((graph_run / 'summary.json').read_text())
+    b = json.loads((replay_run / 'summary.json').read_text())
+    assert b['misalignment_estimate_rad'] == pytest.approx(a['misalignment_estimate_rad'], abs=1e-12)
+
+
+def test_filter_never_reads_truth(graph_run):
+    stats = json.loads((graph_run / 'stats' / 'alignment_filter_node.json').read_text())
+    assert set(stats['received']) == {'/aircraft/imu', '/master/odom', '/ldv/twist'}
+    src = (ROOT / 'src/alignment_filter_node/alignment_filter_node/node.py').read_text()
+    assert '/truth' not in src and 'TRUTH' not in src
+
+
+def test_invalid_scenario_value_fails_with_named_key(tmp_path):
+    p = subprocess.run([str(ROOT / 'scripts/run_graph.sh'), '--out', str(tmp_path / 'x'),
+                        '--set', 'ship.sea_state=12'], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2
+    assert 'sea_state' in p.stderr
