@@ -77,7 +77,7 @@ def test_bag_reads_with_independent_reader(graph_run):
     counts: dict[str, int] = {}
     first_imu = None
     with open(files[0], 'rb') as f:
-        for schema, channel, message, decoded in make_reader(
+        for schema, channel, _message, decoded in make_reader(
                 f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
             counts[channel.topic] = counts.get(channel.topic, 0) + 1
             if channel.topic == '/aircraft/imu' and first_imu is None:
@@ -88,10 +88,9 @@ def test_bag_reads_with_independent_reader(graph_run):
     # REP-145: no orientation; the two decoders agree on the first IMU message
     assert first_imu.orientation_covariance[0] == -1.0
     assert first_imu.header.frame_id == 'aircraft'
+    from alignment_ros.bag import read_bag
     from rclpy.serialization import deserialize_message
     from sensor_msgs.msg import Imu
-
-    from alignment_ros.bag import read_bag
     ours = deserialize_message(next(read_bag(bag, ['/aircraft/imu'])).data, Imu)
     for f in ('x', 'y', 'z'):
         assert getattr(ours.linear_acceleration, f) == getattr(first_imu.linear_acceleration, f)

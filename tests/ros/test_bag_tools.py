@@ -17,6 +17,9 @@ from pathlib import Path
 import pytest
 import rclpy
 import yaml
+from alignment_ros.bag import BagError, BagReader, BagWriter, read_bag, topic_counts
+from alignment_ros.echo_format import to_csv_header, to_csv_row, to_yaml
+from alignment_ros.qos import STREAM
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
@@ -29,10 +32,6 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
-
-from alignment_ros.bag import BagError, BagReader, BagWriter, read_bag, topic_counts
-from alignment_ros.echo_format import to_csv_header, to_csv_row, to_yaml
-from alignment_ros.qos import STREAM
 
 IMU = 'sensor_msgs/msg/Imu'
 CLOCK = 'rosgraph_msgs/msg/Clock'
@@ -287,11 +286,12 @@ def test_bag_writer_standard_layout(tmp_path: Path) -> None:
     assert meta['version'] == 9
     assert meta['storage_identifier'] == 'mcap'
     assert meta['message_count'] == 450
-    counts = {t['topic_metadata']['name']: t['message_count'] for t in meta['topics_with_message_count']}
+    topics = meta['topics_with_message_count']
+    counts = {t['topic_metadata']['name']: t['message_count'] for t in topics}
     assert counts == {'/clock': 100, '/aircraft/imu': 300, '/alignment/state': 50}
-    types = {t['topic_metadata']['name']: t['topic_metadata']['type'] for t in meta['topics_with_message_count']}
+    types = {t['topic_metadata']['name']: t['topic_metadata']['type'] for t in topics}
     assert types['/aircraft/imu'] == IMU
-    hashes = [t['topic_metadata']['type_description_hash'] for t in meta['topics_with_message_count']]
+    hashes = [t['topic_metadata']['type_description_hash'] for t in topics]
     assert all(h.startswith('RIHS01_') for h in hashes)
     mcap_file = bag / meta['relative_file_paths'][0]
 
@@ -303,7 +303,7 @@ def test_bag_writer_standard_layout(tmp_path: Path) -> None:
         summary = reader.get_summary()
         assert {s.encoding for s in summary.schemas.values()} == {'ros2msg'}
         assert {c.message_encoding for c in summary.channels.values()} == {'cdr'}
-        for schema, channel, message, decoded in reader.iter_decoded_messages():
+        for _schema, channel, message, decoded in reader.iter_decoded_messages():
             seen[channel.topic].append((message.log_time, decoded))
     assert {t: len(v) for t, v in seen.items()} == counts
     for (log_time, dec), orig in zip(seen['/aircraft/imu'], msgs['/aircraft/imu']):
@@ -313,7 +313,8 @@ def test_bag_writer_standard_layout(tmp_path: Path) -> None:
         assert dec.angular_velocity.x == orig.angular_velocity.x
         assert dec.linear_acceleration.z == orig.linear_acceleration.z
         assert list(dec.orientation_covariance) == list(orig.orientation_covariance)
-    assert [list(d.data) for _, d in seen['/alignment/state']] == [list(m.data) for m in msgs['/alignment/state']]
+    assert [list(d.data) for _, d in seen['/alignment/state']] == [
+        list(m.data) for m in msgs['/alignment/state']]
     assert [d.clock.sec * NS + d.clock.nanosec for _, d in seen['/clock']] == [t for t, _ in seen['/clock']]
 
     # our reader: log-time order across topics (written topic by topic), same counts
@@ -346,7 +347,7 @@ def test_truncated_bag_and_non_bag(tmp_path: Path, caplog: pytest.LogCaptureFixt
         got = list(reader.messages())
     assert reader.truncated
     assert 'truncated' in caplog.text and 'metadata.yaml' in caplog.text
-    assert 0.5 * n < len(got) < 0.61 * n
+    assert 0.5 * n < len(got) < 0.65 * n  # the file ends with its index: a bit over 60 %
     stamps = [stamp_ns(deserialize_message(m.data, Imu)) for m in got]
     assert stamps == [stamp_ns(imu(i)) for i in range(len(got))]  # exactly the prefix
     assert topic_counts(cut) == {'/aircraft/imu': len(got)}

@@ -23,9 +23,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import ARCMIN, G0
+from .attitude import ARCMIN, G0, quat_to_dcm_batch, rotvec_to_dcm_batch
 from .config import require
-from .samples import AircraftTruth, ShipSample
+from .samples import AircraftTruth, ShipBatch, ShipSample
 
 GL_NODES = np.array([0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6)])
 GL_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 18.0
@@ -82,91 +82,125 @@ class AircraftKinematics:
         self.release_state: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def relative(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """r, r', r'' (N, 3) in ship axes at times tau (s since scenario start), on deck."""
+        """r, r', r'' (..., 3) in ship axes at times tau (...) (s since scenario start), on deck."""
         tau = np.asarray(tau, dtype=float)
         s_t = np.clip(tau - self.launch, 0.0, self.release - self.launch)
         moving = ((tau > self.launch) & (tau <= self.release)).astype(float)
         s = 0.5 * self.acc * s_t**2
         sd = self.acc * s_t
         sdd = self.acc * moving
-        r = self.r0 + s[:, None] * self.track
-        return r, sd[:, None] * self.track, sdd[:, None] * self.track
+        r = self.r0 + s[..., None] * self.track
+        return r, sd[..., None] * self.track, sdd[..., None] * self.track
 
     def _on_deck(self, c_nb, w, wd, v_n, a_n, p_w, tau):
-        """Aircraft nav quantities on the deck (vectorised over leading dim N)."""
+        """Aircraft nav quantities on the deck; leading dims (...) of tau, vectors (..., 3)."""
         r, rd, rdd = self.relative(tau)
         wxr = np.cross(w, r)
-        v_p = v_n + np.einsum('nij,nj->ni', c_nb, wxr + rd)
+        v_p = v_n + np.einsum('...ij,...j->...i', c_nb, wxr + rd)
         a_rel = np.cross(wd, r) + np.cross(w, wxr) + 2.0 * np.cross(w, rd) + rdd
-        a_p = a_n + np.einsum('nij,nj->ni', c_nb, a_rel)
-        p_p = p_w + np.einsum('nij,nj->ni', c_nb, r)
+        a_p = a_n + np.einsum('...ij,...j->...i', c_nb, a_rel)
+        p_p = p_w + np.einsum('...ij,...j->...i', c_nb, r)
         c_na = c_nb @ self.c_sa                                          # C_a^n
         w_na = w @ self.c_sa                                             # C_s^a w (row form)
         return c_na, w_na, v_p, a_p, p_p
 
     def _free(self, tau):
         c_rel, v_rel, p_rel = self.release_state
-        n = len(tau)
-        c_na = np.broadcast_to(c_rel, (n, 3, 3))
-        v_p = np.tile(v_rel, (n, 1))
-        p_p = p_rel + np.outer(tau - self.release, v_rel)
-        return c_na, np.zeros((n, 3)), v_p, np.zeros((n, 3)), p_p
+        tau = np.asarray(tau, dtype=float)
+        c_na = np.broadcast_to(c_rel, tau.shape + (3, 3))
+        v_p = np.broadcast_to(v_rel, tau.shape + (3,))
+        p_p = p_rel + (tau - self.release)[..., None] * v_rel
+        return c_na, np.zeros(tau.shape + (3,)), v_p, np.zeros(tau.shape + (3,)), p_p
 
     def _imu(self, c_na, w_na, v_p, a_p, p_p):
         lat, _, h = self.plane.to_geodetic(p_p)
         w_ie = earth.omega_ie_n(lat)
         w_en = earth.omega_en_n(lat, h, v_p)
-        w_ib = w_na + np.einsum('nji,nj->ni', c_na, w_ie + w_en)
+        w_ib = w_na + np.einsum('...ji,...j->...i', c_na, w_ie + w_en)
         f_n = a_p + np.cross(2.0 * w_ie + w_en, v_p) - earth.gravity_n(lat, h)
-        return w_ib, np.einsum('nji,nj->ni', c_na, f_n)
+        return w_ib, np.einsum('...ji,...j->...i', c_na, f_n)
+
+    def truth_batch(self, sb: ShipBatch, tau: np.ndarray) -> dict[str, np.ndarray]:
+        """Aircraft truth at K ship samples: p_w, q_nb, v_b, w_b (K, ...) and on_deck (K,).
+        Records the release state when the release instant is among the samples."""
+        tau = np.asarray(tau, dtype=float)
+        c_nb = quat_to_dcm_batch(sb.q_nb)
+        on = tau <= self.release
+        c_na = np.empty((len(tau), 3, 3))
+        w_na = np.zeros((len(tau), 3))
+        v_p = np.empty((len(tau), 3))
+        p_p = np.empty((len(tau), 3))
+        if np.any(on):
+            v_n = np.einsum('kij,kj->ki', c_nb[on], sb.v_b[on])
+            a_n = np.einsum('kij,kj->ki', c_nb[on], sb.a_b[on])
+            c_na[on], w_na[on], v_p[on], _, p_p[on] = self._on_deck(
+                c_nb[on], sb.w_b[on], sb.wdot_b[on], v_n, a_n, sb.p_w[on], tau[on])
+            rel = np.flatnonzero(tau == self.release)
+            if len(rel):
+                k = rel[0]
+                self.release_state = (c_na[k].copy(), v_p[k].copy(), p_p[k].copy())
+        if np.any(~on):
+            if self.release_state is None:
+                raise RuntimeError('free flight before the release state was seen')
+            c_na[~on], w_na[~on], v_p[~on], _, p_p[~on] = self._free(tau[~on])
+        q = Rotation.from_matrix(c_na).as_quat()
+        return {'p_w': p_p, 'q_nb': q, 'v_b': np.einsum('kji,kj->ki', c_na, v_p), 'w_b': w_na,
+                'on_deck': on}
 
     def truth(self, s: ShipSample, tau: float) -> AircraftTruth:
-        """Aircraft truth at a ship sample (tau = its time since scenario start)."""
-        on_deck = tau <= self.release
-        c_nb = Rotation.from_quat(s.q_nb).as_matrix()
-        if on_deck:
-            c_na, w_na, v_p, _, p_p = self._on_deck(
-                c_nb[None], s.w_b[None], s.wdot_b[None], (c_nb @ s.v_b)[None],
-                (c_nb @ s.a_b)[None], s.p_w[None], np.array([tau]))
-            if tau == self.release:
-                self.release_state = (c_na[0].copy(), v_p[0].copy(), p_p[0].copy())
-        else:
-            c_na, w_na, v_p, _, p_p = self._free(np.array([tau]))
-        c_na = c_na[0]
-        return AircraftTruth(t_ns=s.t_ns, p_w=p_p[0], q_nb=Rotation.from_matrix(c_na).as_quat(),
-                             v_b=c_na.T @ v_p[0], w_b=w_na[0], misalignment=self.mu.copy(),
-                             on_deck=bool(on_deck))
+        """Aircraft truth at one ship sample (tau = its time since scenario start)."""
+        d = self.truth_batch(ShipBatch.of([s]), np.array([tau]))
+        return AircraftTruth(t_ns=s.t_ns, p_w=d['p_w'][0], q_nb=d['q_nb'][0], v_b=d['v_b'][0],
+                             w_b=d['w_b'][0], misalignment=self.mu.copy(), on_deck=bool(d['on_deck'][0]))
+
+    def increments_batch(self, s0: ShipBatch, s1: ShipBatch, tau0: np.ndarray, tau1: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """Ideal (delta_theta, delta_v), each (K, 3), over (tau0, tau1] for K intervals."""
+        tau0 = np.asarray(tau0, dtype=float)
+        h = np.asarray(tau1, dtype=float) - tau0                         # (K,)
+        u = GL_NODES                                                     # (J,)
+        tau = tau0[:, None] + u[None, :] * h[:, None]                    # (K, J)
+        w_ib = np.empty(tau.shape + (3,))
+        f = np.empty(tau.shape + (3,))
+        free = tau0 >= self.release
+        if np.any(free):
+            if self.release_state is None:
+                raise RuntimeError('free flight before the release state was seen')
+            w_ib[free], f[free] = self._imu(*self._free(tau[free]))
+        deck = ~free
+        if np.any(deck):
+            hk = h[deck][:, None, None]                                  # (K, 1, 1)
+            a = s0.slice(deck) if not np.all(deck) else s0
+            b = s1.slice(deck) if not np.all(deck) else s1
+            c0, c1 = quat_to_dcm_batch(a.q_nb), quat_to_dcm_batch(b.q_nb)
+            # cubic Hermite basis, its derivative and its integral from 0 to u; shape (1, J, 1)
+            uu = u[None, :, None]
+            h00, h10, h01, h11 = 2*uu**3 - 3*uu**2 + 1, uu**3 - 2*uu**2 + uu, -2*uu**3 + 3*uu**2, uu**3 - uu**2
+            d00, d10, d01, d11 = 6*uu**2 - 6*uu, 3*uu**2 - 4*uu + 1, -6*uu**2 + 6*uu, 3*uu**2 - 2*uu
+            i00, i10 = uu**4/2 - uu**3 + uu, uu**4/4 - 2*uu**3/3 + uu**2/2
+            i01, i11 = -uu**4/2 + uu**3, uu**4/4 - uu**3/3
+
+            def herm(x0, dx0, x1, dx1, b0, b1, b2, b3):
+                return (b0 * x0[:, None] + b1 * hk * dx0[:, None] + b2 * x1[:, None]
+                        + b3 * hk * dx1[:, None])
+            w = herm(a.w_b, a.wdot_b, b.w_b, b.wdot_b, h00, h10, h01, h11)
+            wd = herm(a.w_b, a.wdot_b, b.w_b, b.wdot_b, d00, d10, d01, d11) / hk
+            th = hk * herm(a.w_b, a.wdot_b, b.w_b, b.wdot_b, i00, i10, i01, i11)
+            c_nb = c0[:, None] @ rotvec_to_dcm_batch(th)
+            v0 = np.einsum('kij,kj->ki', c0, a.v_b)
+            v1 = np.einsum('kij,kj->ki', c1, b.v_b)
+            a0 = np.einsum('kij,kj->ki', c0, a.a_b)
+            a1 = np.einsum('kij,kj->ki', c1, b.a_b)
+            v_n = herm(v0, a0, v1, a1, h00, h10, h01, h11)
+            a_n = herm(v0, a0, v1, a1, d00, d10, d01, d11) / hk
+            p_w = (1.0 - uu) * a.p_w[:, None] + uu * b.p_w[:, None]
+            w_ib[deck], f[deck] = self._imu(*self._on_deck(c_nb, w, wd, v_n, a_n, p_w, tau[deck]))
+        return (h[:, None] * np.einsum('kjc,j->kc', w_ib, GL_WEIGHTS),
+                h[:, None] * np.einsum('kjc,j->kc', f, GL_WEIGHTS))
 
     def increments(self, s0: ShipSample, s1: ShipSample, tau0: float, tau1: float
                    ) -> tuple[np.ndarray, np.ndarray]:
         """Ideal (delta_theta, delta_v), each (3,), over (tau0, tau1] between two ship samples."""
-        h = tau1 - tau0
-        u = GL_NODES
-        tau = tau0 + u * h
-        if tau0 >= self.release:
-            if self.release_state is None:
-                raise RuntimeError("free flight before the release state was seen")
-            w_ib, f = self._imu(*self._free(tau))
-        else:
-            c0 = Rotation.from_quat(s0.q_nb).as_matrix()
-            c1 = Rotation.from_quat(s1.q_nb).as_matrix()
-            # cubic Hermite basis, its derivative and its integral from 0 to u
-            h00, h10, h01, h11 = 2*u**3 - 3*u**2 + 1, u**3 - 2*u**2 + u, -2*u**3 + 3*u**2, u**3 - u**2
-            d00, d10, d01, d11 = 6*u**2 - 6*u, 3*u**2 - 4*u + 1, -6*u**2 + 6*u, 3*u**2 - 2*u
-            i00, i10 = u**4/2 - u**3 + u, u**4/4 - 2*u**3/3 + u**2/2
-            i01, i11 = -u**4/2 + u**3, u**4/4 - u**3/3
-            w = np.outer(h00, s0.w_b) + np.outer(h10 * h, s0.wdot_b) + np.outer(h01, s1.w_b) \
-                + np.outer(h11 * h, s1.wdot_b)
-            wd = (np.outer(d00, s0.w_b) + np.outer(d10 * h, s0.wdot_b) + np.outer(d01, s1.w_b)
-                  + np.outer(d11 * h, s1.wdot_b)) / h
-            th = h * (np.outer(i00, s0.w_b) + np.outer(i10 * h, s0.wdot_b) + np.outer(i01, s1.w_b)
-                      + np.outer(i11 * h, s1.wdot_b))
-            c_nb = c0 @ Rotation.from_rotvec(th).as_matrix()
-            v0, v1 = c0 @ s0.v_b, c1 @ s1.v_b
-            a0, a1 = c0 @ s0.a_b, c1 @ s1.a_b
-            v_n = np.outer(h00, v0) + np.outer(h10 * h, a0) + np.outer(h01, v1) + np.outer(h11 * h, a1)
-            a_n = (np.outer(d00, v0) + np.outer(d10 * h, a0) + np.outer(d01, v1)
-                   + np.outer(d11 * h, a1)) / h
-            p_w = np.outer(1.0 - u, s0.p_w) + np.outer(u, s1.p_w)
-            w_ib, f = self._imu(*self._on_deck(c_nb, w, wd, v_n, a_n, p_w, tau))
-        return h * (GL_WEIGHTS @ w_ib), h * (GL_WEIGHTS @ f)
+        dth, dv = self.increments_batch(ShipBatch.of([s0]), ShipBatch.of([s1]),
+                                        np.array([tau0]), np.array([tau1]))
+        return dth[0], dv[0]

@@ -5,6 +5,8 @@ rate, and the geodetic <-> ECEF <-> local tangent-plane conversions used for wor
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 A = 6378137.0                      # semi-major axis, m
@@ -103,3 +105,20 @@ class TangentPlane:
 
     def to_geodetic(self, enu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return ecef_to_geodetic(np.asarray(enu) @ self.c + self.origin)
+
+
+def local_scalar(lat: float, h: float, v_n: np.ndarray
+                 ) -> tuple[float, float, np.ndarray, np.ndarray, float]:
+    """Scalar fast path for the strapdown: (R_M, R_N, omega_ie^n, omega_en^n, |g|)."""
+    sl, cl = math.sin(lat), math.cos(lat)
+    s2 = sl * sl
+    den = 1.0 - E2 * s2
+    sq = math.sqrt(den)
+    r_n = A / sq
+    r_m = A * (1.0 - E2) / (den * sq)
+    w_ie = np.array([0.0, OMEGA_IE * cl, OMEGA_IE * sl])
+    ve = v_n[0]
+    w_en = np.array([-v_n[1] / (r_m + h), ve / (r_n + h), ve * (sl / cl) / (r_n + h)])
+    g0 = G_EQUATOR * (1.0 + K_SOMIGLIANA * s2) / sq
+    g = g0 * (1.0 - 2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) * h + 3.0 / A**2 * h * h)
+    return r_m, r_n, w_ie, w_en, g

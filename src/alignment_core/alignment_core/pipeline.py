@@ -9,8 +9,8 @@ import numpy as np
 
 from . import earth
 from .aircraft import AircraftKinematics
-from .attitude import DEG
-from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
+from .attitude import ARCMIN, DEG
+from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipBatch, ShipSample
 from .scenario import Scenario, tau_of
 from .sensors import ImuErrorModel, LdvModel, MasterInsModel
 from .ship import PaperShipMotion
@@ -29,6 +29,18 @@ class SlaveImuStage:
         self.kin = AircraftKinematics(sc.aircraft, plane_of(sc), sc.rate_hz)
         self.errors = ImuErrorModel(sc.imu, sc.seed)
         self.prev: ShipSample | None = None
+
+    def run_batch(self, sb: ShipBatch) -> tuple[dict[str, np.ndarray], list[ImuSample]]:
+        """All samples at once (same numbers as calling `step` on each in turn)."""
+        tau = (sb.t_ns - self.t0) / 1e9
+        truth = self.kin.truth_batch(sb, tau)
+        dth, dv = self.kin.increments_batch(sb.slice(slice(0, -1)), sb.slice(slice(1, None)),
+                                            tau[:-1], tau[1:])
+        gyro, accel = self.errors.measure_batch(dth, dv, tau[1:] - tau[:-1])
+        imu = [ImuSample(t_ns=int(sb.t_ns[k + 1]), gyro=gyro[k], accel=accel[k])
+               for k in range(len(gyro))]
+        self.prev = sb.sample(len(sb) - 1)
+        return truth, imu
 
     def step(self, s: ShipSample) -> tuple[AircraftTruth, ImuSample | None]:
         tau = tau_of(s.t_ns, self.t0)
@@ -61,25 +73,48 @@ def ship_samples(sc: Scenario) -> list[ShipSample]:
     return ship_source(sc).samples(taus, sc.t0_ns, sc.dt_ns)
 
 
+@dataclass
+class Inputs:
+    """Everything the filter and the evaluation see, for a whole scenario."""
+    ships: ShipBatch
+    truth: dict[str, np.ndarray]
+    imu: list[ImuSample]
+    master: list[MasterSample]
+    ldv: list[LdvSample]
+
+
+def simulate(sc: Scenario) -> Inputs:
+    """Ship, slave IMU, master INS and LDV for the whole run, vectorised (the same numbers
+    the nodes produce sample by sample)."""
+    ships = ShipBatch.of(ship_samples(sc))
+    truth, imu = SlaveImuStage(sc).run_batch(ships)
+    master = MasterInsModel(sc.master, sc.seed, sc.ship.lat_deg * DEG).measure_batch(ships)
+    ldv = LdvModel(sc.ldv, sc.seed).measure_batch(ships, truth['p_w'], truth['q_nb'], truth['v_b'])
+    return Inputs(ships, truth, imu, master, ldv)
+
+
+def align(sc: Scenario, inp: Inputs) -> TransferAlignment:
+    """Feed the inputs to a fresh filter in the order the graph's nodes publish them."""
+    filt = TransferAlignment(sc.filter, plane_of(sc), sc.rate_hz)
+    for k in range(len(inp.ships)):
+        if k > 0:
+            filt.push_imu(inp.imu[k - 1])
+        filt.push_ldv(inp.ldv[k])
+        filt.push_master(inp.master[k])
+        filt.process()
+    filt.process(final=True)
+    return filt
+
+
 def run(sc: Scenario, keep_truth: bool = True) -> BatchResult:
     """Run the whole scenario in-process; returns the filter outputs and the truth."""
     wall = time.perf_counter()
-    ships = ship_samples(sc)
-    slave = SlaveImuStage(sc)
-    master = MasterInsModel(sc.master, sc.seed, sc.ship.lat_deg * DEG)
-    ldv = LdvModel(sc.ldv, sc.seed)
-    filt = TransferAlignment(sc.filter, plane_of(sc), sc.rate_hz)
+    inp = simulate(sc)
+    filt = align(sc, inp)
     truths: list[AircraftTruth] = []
-    for s in ships:
-        truth, imu = slave.step(s)
-        if keep_truth:
-            truths.append(truth)
-        m: MasterSample = master.measure(s)
-        ld: LdvSample = ldv.measure(s, truth)
-        if imu is not None:
-            filt.push_imu(imu)
-        filt.push_ldv(ld)
-        filt.push_master(m)
-        filt.process()
-    filt.process(final=True)
+    if keep_truth:
+        t, mu = inp.truth, np.asarray(sc.aircraft.misalignment_arcmin) * ARCMIN
+        truths = [AircraftTruth(t_ns=int(inp.ships.t_ns[k]), p_w=t['p_w'][k], q_nb=t['q_nb'][k],
+                                v_b=t['v_b'][k], w_b=t['w_b'][k], misalignment=mu,
+                                on_deck=bool(t['on_deck'][k])) for k in range(len(inp.ships))]
     return BatchResult(sc, filt.outputs, truths, filt, time.perf_counter() - wall)

@@ -71,3 +71,31 @@ class AircraftTruth:
     w_b: np.ndarray
     misalignment: np.ndarray
     on_deck: bool
+
+
+@dataclass(frozen=True, slots=True)
+class ShipBatch:
+    """K ship samples as arrays (the same fields as ShipSample, with a leading K axis)."""
+    t_ns: np.ndarray
+    p_w: np.ndarray
+    q_nb: np.ndarray
+    v_b: np.ndarray
+    w_b: np.ndarray
+    a_b: np.ndarray
+    wdot_b: np.ndarray
+
+    @staticmethod
+    def of(samples: list[ShipSample]) -> ShipBatch:
+        return ShipBatch(t_ns=np.array([s.t_ns for s in samples], dtype=np.int64),
+                         **{f: np.array([getattr(s, f) for s in samples])
+                            for f in ('p_w', 'q_nb', 'v_b', 'w_b', 'a_b', 'wdot_b')})
+
+    def __len__(self) -> int:
+        return len(self.t_ns)
+
+    def sample(self, k: int) -> ShipSample:
+        return ShipSample(t_ns=int(self.t_ns[k]), p_w=self.p_w[k], q_nb=self.q_nb[k], v_b=self.v_b[k],
+                          w_b=self.w_b[k], a_b=self.a_b[k], wdot_b=self.wdot_b[k])
+
+    def slice(self, sl: slice) -> ShipBatch:
+        return ShipBatch(*(getattr(self, f)[sl] for f in ShipBatch.__slots__))

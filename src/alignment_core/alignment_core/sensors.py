@@ -24,7 +24,7 @@ from . import earth
 from .attitude import DPH, G0
 from .config import require
 from .rng import stage_rng
-from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
+from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipBatch, ShipSample
 
 UG = 1e-6 * G0
 
@@ -63,11 +63,19 @@ class ImuErrorModel:
         self.accel_bias = self.rng.standard_normal(3) * cfg.accel_bias_ug * UG
 
     def measure(self, t_ns: int, dtheta: np.ndarray, dv: np.ndarray, h: float) -> ImuSample:
-        n = self.rng.standard_normal(6)
-        sh = np.sqrt(h)
-        dth = dtheta + self.gyro_bias * h + n[:3] * self.cfg.arw * sh
-        dvv = dv + self.accel_bias * h + n[3:] * self.cfg.vrw * sh
-        return ImuSample(t_ns=t_ns, gyro=dth / h, accel=dvv / h)
+        g, a = self.measure_batch(dtheta[None], dv[None], np.array([h]))
+        return ImuSample(t_ns=t_ns, gyro=g[0], accel=a[0])
+
+    def measure_batch(self, dtheta: np.ndarray, dv: np.ndarray, h: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        """Mean rate and specific force (K, 3) from K ideal increments over intervals h (K,);
+        the noise sequence is the same whether drawn sample by sample or all at once."""
+        n = self.rng.standard_normal((len(h), 6))
+        hh = h[:, None]
+        sh = np.sqrt(hh)
+        dth = dtheta + self.gyro_bias * hh + n[:, :3] * self.cfg.arw * sh
+        dvv = dv + self.accel_bias * hh + n[:, 3:] * self.cfg.vrw * sh
+        return dth / hh, dvv / hh
 
 
 @dataclass(frozen=True)
@@ -100,11 +108,17 @@ class MasterInsModel:
         self.gyro_bias_b = self.rng.standard_normal(3) * cfg.gyro_bias_dph * DPH
 
     def measure(self, s: ShipSample) -> MasterSample:
-        c_true = Rotation.from_quat(s.q_nb)
-        v_n = c_true.apply(s.v_b) + self.rng.standard_normal(3) * self.cfg.velocity_noise_mps
+        return self.measure_batch(ShipBatch.of([s]))[0]
+
+    def measure_batch(self, sb: ShipBatch) -> list[MasterSample]:
+        c_true = Rotation.from_quat(sb.q_nb)
+        v_n = c_true.apply(sb.v_b) + self.rng.standard_normal((len(sb), 3)) * self.cfg.velocity_noise_mps
         c_est = self.err_rot * c_true
-        return MasterSample(t_ns=s.t_ns, p_w=s.p_w.copy(), q_nb=c_est.as_quat(),
-                            v_b=c_est.inv().apply(v_n), w_b=s.w_b + self.gyro_bias_b)
+        q = c_est.as_quat()
+        v_b = c_est.inv().apply(v_n)
+        w_b = sb.w_b + self.gyro_bias_b
+        return [MasterSample(t_ns=int(sb.t_ns[k]), p_w=sb.p_w[k].copy(), q_nb=q[k], v_b=v_b[k],
+                             w_b=w_b[k]) for k in range(len(sb))]
 
 
 @dataclass(frozen=True)
@@ -131,14 +145,22 @@ class LdvModel:
         self.rng = stage_rng(seed, 'ldv')
 
     def measure(self, s: ShipSample, a: AircraftTruth) -> LdvSample:
-        n = self.rng.standard_normal(3) * self.cfg.noise_mps
-        c_ns = Rotation.from_quat(s.q_nb).inv()                            # C_n^s
-        r = c_ns.apply(a.p_w - s.p_w)
-        d = r - np.asarray(self.cfg.origin_m)
-        if not (-self.cfg.beam_halfwidth_m <= d[0] <= self.cfg.track_length_m
-                and np.hypot(d[1], d[2]) <= self.cfg.beam_halfwidth_m):
-            return LdvSample(t_ns=s.t_ns, v_s=np.zeros(3), sigma=self.cfg.noise_mps, valid=False)
-        v_a_n = Rotation.from_quat(a.q_nb).apply(a.v_b)
-        v_s_n = Rotation.from_quat(s.q_nb).apply(s.v_b)
-        v_rel = c_ns.apply(v_a_n - v_s_n) - np.cross(s.w_b, r)
-        return LdvSample(t_ns=s.t_ns, v_s=v_rel + n, sigma=self.cfg.noise_mps, valid=True)
+        return self.measure_batch(ShipBatch.of([s]), a.p_w[None], a.q_nb[None], a.v_b[None])[0]
+
+    def measure_batch(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray
+                      ) -> list[LdvSample]:
+        """K measurements from ship samples and aircraft truth (positions, attitudes, body
+        velocities, each (K, ...))."""
+        cfg = self.cfg
+        n = self.rng.standard_normal((len(sb), 3)) * cfg.noise_mps
+        c_ns = Rotation.from_quat(sb.q_nb).inv()                           # C_n^s
+        r = c_ns.apply(p_a - sb.p_w)
+        d = r - np.asarray(cfg.origin_m)
+        valid = ((d[:, 0] >= -cfg.beam_halfwidth_m) & (d[:, 0] <= cfg.track_length_m)
+                 & (np.hypot(d[:, 1], d[:, 2]) <= cfg.beam_halfwidth_m))
+        v_a_n = Rotation.from_quat(q_a).apply(v_a_b)
+        v_s_n = Rotation.from_quat(sb.q_nb).apply(sb.v_b)
+        v_rel = c_ns.apply(v_a_n - v_s_n) - np.cross(sb.w_b, r) + n
+        zero = np.zeros(3)
+        return [LdvSample(t_ns=int(sb.t_ns[k]), v_s=v_rel[k] if valid[k] else zero,
+                          sigma=cfg.noise_mps, valid=bool(valid[k])) for k in range(len(sb))]

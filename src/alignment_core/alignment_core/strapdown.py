@@ -7,11 +7,13 @@ C_b^n(k) = exp(-[zeta x]) C_b^n(k-1) exp([phi x]).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import earth
+from .attitude import cross3
 
 
 def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -26,14 +28,14 @@ def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def rotvec_to_quat(v: np.ndarray) -> np.ndarray:
     """(x, y, z, w) quaternion of rotation vector v; series near zero."""
-    a2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    a2 = float(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     if a2 < 1e-12:
         s = 0.5 - a2 / 48.0
         c = 1.0 - a2 / 8.0 + a2 * a2 / 384.0
     else:
-        a = np.sqrt(a2)
-        s = np.sin(0.5 * a) / a
-        c = np.cos(0.5 * a)
+        a = math.sqrt(a2)
+        s = math.sin(0.5 * a) / a
+        c = math.cos(0.5 * a)
     return np.array([v[0] * s, v[1] * s, v[2] * s, c])
 
 
@@ -67,25 +69,25 @@ class Strapdown:
         self.s = state
 
     def update(self, dtheta: np.ndarray, dv: np.ndarray, h: float) -> np.ndarray:
-        """Advance by one interval; returns the mean nav-frame specific force f^n (3,)."""
+        """Advance by one interval; returns the mean nav-frame specific force f^n (3,) and
+        leaves the Earth and transport rates used in `w_ie`, `w_en`."""
         s = self.s
-        r_m, r_n = earth.radii(s.lat)
-        w_ie = earth.omega_ie_n(s.lat)
-        w_en = earth.omega_en_n(s.lat, s.h, s.v_n)
+        r_m, r_n, w_ie, w_en, g_mag = earth.local_scalar(s.lat, s.h, s.v_n)
+        self.w_ie, self.w_en = w_ie, w_en
         w_in = w_ie + w_en
-        phi = dtheta + np.cross(s.prev_dtheta, dtheta) / 12.0
-        dv_b = dv + 0.5 * np.cross(dtheta, dv) + (np.cross(s.prev_dtheta, dv)
-                                                 + np.cross(s.prev_dv, dtheta)) / 12.0
+        phi = dtheta + cross3(s.prev_dtheta, dtheta) / 12.0
+        dv_b = dv + 0.5 * cross3(dtheta, dv) + (cross3(s.prev_dtheta, dv)
+                                                 + cross3(s.prev_dv, dtheta)) / 12.0
         zeta = w_in * h
         c = s.c_nb
         dv_n = c @ dv_b
-        dv_n = dv_n - 0.5 * np.cross(zeta, dv_n)
-        g = earth.gravity_n(s.lat, s.h)
+        dv_n = dv_n - 0.5 * cross3(zeta, dv_n)
+        g = np.array([0.0, 0.0, -g_mag])
         v_old = s.v_n
-        v_new = v_old + dv_n + (g - np.cross(2.0 * w_ie + w_en, v_old)) * h
+        v_new = v_old + dv_n + (g - cross3(2.0 * w_ie + w_en, v_old)) * h
         vm = 0.5 * (v_old + v_new)
         s.lat = s.lat + h * vm[1] / (r_m + s.h)
-        s.lon = s.lon + h * vm[0] / ((r_n + s.h) * np.cos(s.lat))
+        s.lon = s.lon + h * vm[0] / ((r_n + s.h) * math.cos(s.lat))
         s.h = s.h + h * vm[2]
         s.v_n = v_new
         q = quat_mul(rotvec_to_quat(-zeta), quat_mul(s.q_nb, rotvec_to_quat(phi)))

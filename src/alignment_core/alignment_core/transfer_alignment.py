@@ -21,13 +21,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import DEG, DPH
+from .attitude import DEG, DPH, cross3, dcm_to_rotvec_small
 from .config import require
 from .filters.kalman import KalmanFilter
 from .models import velocity_matching as vm
 from .samples import ImuSample, LdvSample, MasterSample
 from .sensors import UG
-from .strapdown import NavState, Strapdown, quat_to_dcm
+from .strapdown import NavState, Strapdown, quat_mul, quat_to_dcm, rotvec_to_quat
 from .sync import StampMerger
 
 STREAMS = ('imu', 'ldv', 'master')
@@ -94,7 +94,7 @@ class Counters:
 
 
 def _finite(*arrays) -> bool:
-    return all(np.all(np.isfinite(a)) for a in arrays)
+    return all(math.isfinite(a.sum()) for a in arrays)
 
 
 class TransferAlignment:
@@ -127,6 +127,7 @@ class TransferAlignment:
         self.last_nis = math.nan
         self.matching = False
         self.outputs: list[Estimate] = []
+        self._qd: dict[float, np.ndarray] = {}
 
     # ----- input -----
     def push_imu(self, s: ImuSample) -> bool:
@@ -166,13 +167,13 @@ class TransferAlignment:
             self.counters.imu_gaps += 1
         dth = (s.gyro - self.bg) * h
         dv = (s.accel - self.ba) * h
-        st = self.ins.s
-        c_nb = st.c_nb
-        w_ie = earth.omega_ie_n(st.lat)
-        w_en = earth.omega_en_n(st.lat, st.h, st.v_n)
+        c_nb = self.ins.s.c_nb
         f_n = self.ins.update(dth, dv, h)
-        phi = vm.transition(c_nb, f_n, w_ie, w_en, h)
-        self.kf.predict(phi, vm.process_noise(c_nb, self.noise, h))
+        phi = vm.transition(c_nb, f_n, self.ins.w_ie, self.ins.w_en, h)
+        qd = self._qd.get(h)
+        if qd is None:
+            qd = self._qd[h] = vm.process_noise(self.noise, h)
+        self.kf.predict(phi, qd)
         self.t_ins = t
 
     def _on_ldv(self, t: int, s: LdvSample) -> None:
@@ -188,7 +189,7 @@ class TransferAlignment:
         r = self.r0 + self.deck_disp if self.cfg.lever_arm_compensation else self.deck_disp
         ldv = self.last_ldv if (self.last_ldv is not None and self.last_ldv.t_ns == t) else None
         v_rel = ldv.v_s if (ldv is not None and ldv.valid) else np.zeros(3)
-        v_ref = c_m @ (m.v_b + np.cross(m.w_b, r) + v_rel)
+        v_ref = c_m @ (m.v_b + cross3(m.w_b, r) + v_rel)
         if self.ins is None:
             self._initialise(t, m, c_m, r, v_ref)
         elif ldv is not None and ldv.valid and t == self.t_ins:
@@ -227,14 +228,14 @@ class TransferAlignment:
         x = self.kf.x
         self.last_x = x.copy()
         # feedback: C <- (I + [phi x]) C, V <- V - dV, biases accumulate
-        q_corr = Rotation.from_rotvec(x[0:3])
-        st.q_nb = (q_corr * Rotation.from_quat(st.q_nb)).as_quat()
+        q = quat_mul(rotvec_to_quat(x[0:3]), st.q_nb)
+        st.q_nb = q / np.sqrt(q @ q)
         st.v_n = st.v_n - x[3:6]
         self.bg = self.bg + x[6:9]
         self.ba = self.ba + x[9:12]
         self.kf.x = np.zeros(vm.N)
         c_na = quat_to_dcm(st.q_nb)
-        self.mu = Rotation.from_matrix(c_m.T @ c_na).as_rotvec()
+        self.mu = dcm_to_rotvec_small(c_m.T @ c_na)
         p_att = c_na.T @ self.kf.P[0:3, 0:3] @ c_na
         self.mu_sigma = np.sqrt(np.diag(p_att))
 

@@ -4,15 +4,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from alignment_core.samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
+from alignment_core.transfer_alignment import Estimate
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import AccelStamped, PoseWithCovarianceStamped, TwistWithCovarianceStamped, Vector3Stamped
+from geometry_msgs.msg import (
+    AccelStamped,
+    PoseWithCovarianceStamped,
+    TwistWithCovarianceStamped,
+    Vector3Stamped,
+)
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu, NavSatFix, NavSatStatus
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
-
-from alignment_core.samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
-from alignment_core.transfer_alignment import Estimate
 
 from . import topics
 

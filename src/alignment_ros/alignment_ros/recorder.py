@@ -9,9 +9,11 @@ any ``/clock``: the largest stamp seen so far).
 
 End: the recorder stops at the first of
 
-* ``end_time``: ``--end-time`` is given, every topic with a stamp (Header or Clock) that has
-  received at least one message has received one stamped >= end-time, and so has every topic of
-  ``--wait-topics`` (for a topic without a stamp: its log time). It then keeps recording until
+* ``end_time``: ``--end-time`` is given and every topic of ``--wait-topics`` has received a
+  message stamped >= end-time (for a topic without a stamp: its log time); without
+  ``--wait-topics``, every topic with a stamp that has received anything must reach it (a
+  stream that legitimately stops early, like ``/truth/misalignment`` at the launch, belongs
+  outside ``--wait-topics``). It then keeps recording until
   no message arrived for ``--drain`` wall seconds (late messages of other topics are not lost);
 * ``idle_timeout``: nothing arrived for ``--idle-timeout`` wall seconds after the first message;
 * ``signal``: SIGINT or SIGTERM.
@@ -66,9 +68,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument('--wait-topics', nargs='+', default=[], metavar='TOPIC',
                    help='with --end-time: topics that must also reach end-time before stopping')
     p.add_argument('--idle-timeout', type=float, default=5.0, metavar='S',
-                   help='stop when nothing arrived for S wall seconds after the first message (default 5)')
+                   help='stop when nothing arrived for S wall seconds after the first message '
+                        '(default 5)')
     p.add_argument('--drain', type=float, default=0.5, metavar='S',
-                   help='after end-time is reached, keep recording until S wall seconds are quiet (default 0.5)')
+                   help='after end-time is reached, keep recording until S wall seconds are quiet '
+                        '(default 0.5)')
     p.add_argument('--stats', type=Path, metavar='FILE', help='write counts and end reason as JSON')
     p.add_argument('--executor', choices=('events', 'single'), default='events',
                    help='rclpy executor (default: events, the EventsExecutor)')
@@ -76,6 +80,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     if args.out.exists():
         p.error(f'--out {args.out} exists already: the recorder only creates new bags')
     args.topics = dict(args.topics) if args.topics else dict(TOPIC_TYPES)
+    for topic, type_name in args.topics.items():
+        try:
+            stamp_reader(type_name)
+            msg_class(type_name)
+        except (BagError, ImportError, AttributeError, ValueError) as exc:
+            p.error(f'{topic}: unusable message type {type_name!r}: {exc}')
     args.wait_topics = [t if t.startswith('/') else '/' + t for t in args.wait_topics]
     missing = [t for t in args.wait_topics if t not in args.topics]
     if missing:
@@ -138,10 +148,13 @@ class Recorder:
         return on_message
 
     def end_time_reached(self) -> bool:
-        """True when every stamped topic seen and every --wait-topics topic reached end-time."""
+        """True when every --wait-topics topic (or, without any, every stamped topic seen)
+        has reached end-time."""
         if self.end_ns is None or not self.stamped_seen:
             return False
-        return self.stamped_seen <= self.reached and self.wait_topics <= self.reached
+        if self.wait_topics:
+            return self.wait_topics <= self.reached
+        return self.stamped_seen <= self.reached
 
 
 def make_executor(kind: str) -> Any:

@@ -10,9 +10,8 @@ import json
 from pathlib import Path
 
 import numpy as np
-from rclpy.serialization import deserialize_message
-
 from alignment_core.attitude import ARCMIN
+from rclpy.serialization import deserialize_message
 
 from . import topics
 from .bag import read_bag, topic_counts

@@ -31,24 +31,23 @@ class NoiseDensities:
     accel_bias_rw: float
 
 
+_EYE = np.eye(N)
+
+
 def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray,
                h: float) -> np.ndarray:
     """Phi (12, 12) over an interval h, from the mean attitude, specific force and rates."""
-    f = np.zeros((N, N))
-    f[0:3, 0:3] = -skew(w_ie + w_en)
-    f[0:3, 6:9] = -c_nb
-    f[3:6, 0:3] = skew(f_n)
-    f[3:6, 3:6] = -skew(2.0 * w_ie + w_en)
-    f[3:6, 9:12] = c_nb
-    fh = f * h
-    return np.eye(N) + fh + 0.5 * (fh @ fh)
+    fh = np.zeros((N, N))
+    fh[0:3, 0:3] = skew(-h * (w_ie + w_en))
+    fh[0:3, 6:9] = -h * c_nb
+    fh[3:6, 0:3] = skew(h * f_n)
+    fh[3:6, 3:6] = skew(-h * (2.0 * w_ie + w_en))
+    fh[3:6, 9:12] = h * c_nb
+    return _EYE + fh + 0.5 * (fh @ fh)
 
 
-def process_noise(c_nb: np.ndarray, q: NoiseDensities, h: float) -> np.ndarray:
-    """Qd (12, 12) = G Qc G^T h with G mapping body-frame sensor noise through C_b^n."""
-    qd = np.zeros((N, N))
-    qd[0:3, 0:3] = (q.arw**2 * h) * (c_nb @ c_nb.T)
-    qd[3:6, 3:6] = (q.vrw**2 * h) * (c_nb @ c_nb.T)
-    qd[6:9, 6:9] = np.eye(3) * (q.gyro_bias_rw**2 * h)
-    qd[9:12, 9:12] = np.eye(3) * (q.accel_bias_rw**2 * h)
-    return qd
+def process_noise(q: NoiseDensities, h: float) -> np.ndarray:
+    """Qd (12, 12) = G Qc G^T h. The sensor noises are white and isotropic per triad, so
+    C_b^n Qc C_b^nT = Qc and Qd does not depend on the attitude."""
+    return np.diag(np.repeat([q.arw**2 * h, q.vrw**2 * h, q.gyro_bias_rw**2 * h,
+                              q.accel_bias_rw**2 * h], 3))
