@@ -14,7 +14,7 @@ setup(
     zip_safe=True,
     maintainer='Transfer alignment testbed',
     maintainer_email='dev@transfer-alignment.invalid',
-    description='Shared rclpy glue: topics, QoS, message conversions, sim clock, parameters; recorder, player and echo.',
+    description='Shared rclpy glue: topics, QoS, conversions, parameters; recorder, player, echo.',
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
