@@ -88,9 +88,10 @@ def test_bag_reads_with_independent_reader(graph_run):
     # REP-145: no orientation; the two decoders agree on the first IMU message
     assert first_imu.orientation_covariance[0] == -1.0
     assert first_imu.header.frame_id == 'aircraft'
-    from alignment_ros.bag import read_bag
     from rclpy.serialization import deserialize_message
     from sensor_msgs.msg import Imu
+
+    from alignment_ros.bag import read_bag
     ours = deserialize_message(next(read_bag(bag, ['/aircraft/imu'])).data, Imu)
     for f in ('x', 'y', 'z'):
         assert getattr(ours.linear_acceleration, f) == getattr(first_imu.linear_acceleration, f)

@@ -17,9 +17,6 @@ from pathlib import Path
 import pytest
 import rclpy
 import yaml
-from alignment_ros.bag import BagError, BagReader, BagWriter, read_bag, topic_counts
-from alignment_ros.echo_format import to_csv_header, to_csv_row, to_yaml
-from alignment_ros.qos import STREAM
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
@@ -32,6 +29,10 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
+
+from alignment_ros.bag import BagError, BagReader, BagWriter, read_bag, topic_counts
+from alignment_ros.echo_format import to_csv_header, to_csv_row, to_yaml
+from alignment_ros.qos import STREAM
 
 IMU = 'sensor_msgs/msg/Imu'
 CLOCK = 'rosgraph_msgs/msg/Clock'

@@ -23,7 +23,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import ARCMIN, G0, quat_to_dcm_batch, rotvec_to_dcm_batch
+from .attitude import ARCMIN, G0, cross, quat_to_dcm_batch, rotvec_to_dcm_batch
 from .config import require
 from .samples import AircraftTruth, ShipBatch, ShipSample
 
@@ -95,9 +95,9 @@ class AircraftKinematics:
     def _on_deck(self, c_nb, w, wd, v_n, a_n, p_w, tau):
         """Aircraft nav quantities on the deck; leading dims (...) of tau, vectors (..., 3)."""
         r, rd, rdd = self.relative(tau)
-        wxr = np.cross(w, r)
+        wxr = cross(w, r)
         v_p = v_n + np.einsum('...ij,...j->...i', c_nb, wxr + rd)
-        a_rel = np.cross(wd, r) + np.cross(w, wxr) + 2.0 * np.cross(w, rd) + rdd
+        a_rel = cross(wd, r) + cross(w, wxr) + 2.0 * cross(w, rd) + rdd
         a_p = a_n + np.einsum('...ij,...j->...i', c_nb, a_rel)
         p_p = p_w + np.einsum('...ij,...j->...i', c_nb, r)
         c_na = c_nb @ self.c_sa                                          # C_a^n
@@ -117,7 +117,7 @@ class AircraftKinematics:
         w_ie = earth.omega_ie_n(lat)
         w_en = earth.omega_en_n(lat, h, v_p)
         w_ib = w_na + np.einsum('...ji,...j->...i', c_na, w_ie + w_en)
-        f_n = a_p + np.cross(2.0 * w_ie + w_en, v_p) - earth.gravity_n(lat, h)
+        f_n = a_p + cross(2.0 * w_ie + w_en, v_p) - earth.gravity_n(lat, h)
         return w_ib, np.einsum('...ji,...j->...i', c_na, f_n)
 
     def truth_batch(self, sb: ShipBatch, tau: np.ndarray) -> dict[str, np.ndarray]:

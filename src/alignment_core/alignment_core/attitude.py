@@ -111,3 +111,10 @@ def dcm_to_rotvec_small(c: np.ndarray) -> np.ndarray:
         return v
     ang = np.arctan2(s, 0.5 * (c[0, 0] + c[1, 1] + c[2, 2] - 1.0))
     return v * (ang / s)
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b over the last axis (broadcasting); several times cheaper than np.cross."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import DPH, G0
+from .attitude import DPH, G0, cross
 from .config import require
 from .rng import stage_rng
 from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipBatch, ShipSample
@@ -160,7 +160,7 @@ class LdvModel:
                  & (np.hypot(d[:, 1], d[:, 2]) <= cfg.beam_halfwidth_m))
         v_a_n = Rotation.from_quat(q_a).apply(v_a_b)
         v_s_n = Rotation.from_quat(sb.q_nb).apply(sb.v_b)
-        v_rel = c_ns.apply(v_a_n - v_s_n) - np.cross(sb.w_b, r) + n
+        v_rel = c_ns.apply(v_a_n - v_s_n) - cross(sb.w_b, r) + n
         zero = np.zeros(3)
         return [LdvSample(t_ns=int(sb.t_ns[k]), v_s=v_rel[k] if valid[k] else zero,
                           sigma=cfg.noise_mps, valid=bool(valid[k])) for k in range(len(sb))]

@@ -5,9 +5,6 @@ its outputs do not depend on how the three streams interleave on arrival.
 """
 from __future__ import annotations
 
-from alignment_core.models.velocity_matching import LABELS
-from alignment_core.transfer_alignment import TransferAlignment
-from alignment_ros.params import ScenarioParameters
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
@@ -15,7 +12,10 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
 from alignment_core import pipeline
+from alignment_core.models.velocity_matching import LABELS
+from alignment_core.transfer_alignment import TransferAlignment
 from alignment_ros import convert, node_util, qos, topics
+from alignment_ros.params import ScenarioParameters
 
 
 class AlignmentFilterNode(node_util.CountingNode):

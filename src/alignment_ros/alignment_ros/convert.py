@@ -4,8 +4,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from alignment_core.samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
-from alignment_core.transfer_alignment import Estimate
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import (
@@ -17,6 +15,9 @@ from geometry_msgs.msg import (
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu, NavSatFix, NavSatStatus
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+
+from alignment_core.samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
+from alignment_core.transfer_alignment import Estimate
 
 from . import topics
 

@@ -17,9 +17,9 @@ import time
 from pathlib import Path
 
 import yaml
-from alignment_core.config import ConfigError
 
 from alignment_core import scenario as core_scenario
+from alignment_core.config import ConfigError
 
 from . import summary, topics
 from .params import flat_scenario

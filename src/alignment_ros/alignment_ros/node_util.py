@@ -9,9 +9,10 @@ from collections import Counter
 from pathlib import Path
 
 import rclpy
-from alignment_core.config import ConfigError
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
+
+from alignment_core.config import ConfigError
 
 from . import qos
 

@@ -10,8 +10,9 @@ import json
 from pathlib import Path
 
 import numpy as np
-from alignment_core.attitude import ARCMIN
 from rclpy.serialization import deserialize_message
+
+from alignment_core.attitude import ARCMIN
 
 from . import topics
 from .bag import read_bag, topic_counts

@@ -1,13 +1,13 @@
 """ldv_node: laser Doppler velocimeter, the aircraft's velocity relative to the deck."""
 from __future__ import annotations
 
-from alignment_core.sensors import LdvModel
-from alignment_ros.params import ScenarioParameters
-from alignment_ros.stamped_pairs import StampPairer
 from geometry_msgs.msg import TwistWithCovarianceStamped
 from nav_msgs.msg import Odometry
 
+from alignment_core.sensors import LdvModel
 from alignment_ros import convert, node_util, qos, topics
+from alignment_ros.params import ScenarioParameters
+from alignment_ros.stamped_pairs import StampPairer
 
 
 class LdvNode(node_util.CountingNode):

@@ -1,14 +1,14 @@
 """master_ins_node: the ship master INS solution = ship truth + master INS error model."""
 from __future__ import annotations
 
-from alignment_core.attitude import DEG
-from alignment_core.sensors import MasterInsModel
-from alignment_ros.params import ScenarioParameters
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import NavSatFix
 
 from alignment_core import pipeline
+from alignment_core.attitude import DEG
+from alignment_core.sensors import MasterInsModel
 from alignment_ros import convert, node_util, qos, topics
+from alignment_ros.params import ScenarioParameters
 
 
 class MasterInsNode(node_util.CountingNode):

@@ -4,8 +4,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from alignment_core.config import ConfigError
-from alignment_ros.params import ScenarioParameters
 from geometry_msgs.msg import AccelStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
@@ -13,7 +11,9 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import NavSatFix
 
 from alignment_core import pipeline
+from alignment_core.config import ConfigError
 from alignment_ros import convert, node_util, topics
+from alignment_ros.params import ScenarioParameters
 
 
 class ShipMotionNode(node_util.CountingNode):

@@ -2,14 +2,14 @@
 misalignment, catapult stroke, sensor errors) and the aircraft truth."""
 from __future__ import annotations
 
-from alignment_ros.params import ScenarioParameters
-from alignment_ros.stamped_pairs import StampPairer
 from geometry_msgs.msg import AccelStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 
 from alignment_core import pipeline
 from alignment_ros import convert, node_util, qos, topics
+from alignment_ros.params import ScenarioParameters
+from alignment_ros.stamped_pairs import StampPairer
 
 
 class SlaveInsNode(node_util.CountingNode):
