@@ -160,3 +160,44 @@ def test_rfu_to_flu_is_a_proper_rotation_of_axes():
     mu_rfu = np.array([10.0, 15.0, -30.0]) * att.ARCMIN
     np.testing.assert_allclose(t @ att.rotvec_to_dcm(mu_rfu) @ t.T,
                                att.rotvec_to_dcm(att.rfu_to_flu(mu_rfu)), atol=1e-15)
+
+
+# ----- fast-path helpers used by the vectorised stages and the filter -----
+
+def test_cross_helpers_match_cross_product():
+    rng = np.random.default_rng(7)
+    a, b = rng.standard_normal((5, 4, 3)), rng.standard_normal((5, 4, 3))
+    # component definition of a x b
+    want = np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+    np.testing.assert_allclose(att.cross(a, b), want, atol=1e-15)
+    np.testing.assert_allclose(att.cross3(a[0, 0], b[0, 0]), want[0, 0], atol=1e-15)
+    np.testing.assert_allclose(att.cross(a[0, 0], b)[2, 3], att.cross3(a[0, 0], b[2, 3]),
+                               atol=1e-15)                               # broadcasting
+    np.testing.assert_allclose(att.skew(a[0, 0]) @ b[0, 0], att.cross3(a[0, 0], b[0, 0]), atol=1e-15)
+
+
+def test_quat_to_dcm_batch():
+    rng = np.random.default_rng(8)
+    q = rng.standard_normal((6, 2, 4))
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    c = att.quat_to_dcm_batch(q)
+    assert c.shape == (6, 2, 3, 3)
+    # a unit quaternion (u sin(a/2), cos(a/2)) is the rotation by a about u (Rodrigues)
+    for qq, cc in zip(q.reshape(-1, 4), c.reshape(-1, 3, 3)):
+        ang = 2.0 * np.arctan2(np.linalg.norm(qq[:3]), qq[3])
+        k = att.skew(qq[:3] / np.linalg.norm(qq[:3]))
+        np.testing.assert_allclose(cc, np.eye(3) + np.sin(ang) * k + (1 - np.cos(ang)) * k @ k,
+                                   atol=1e-14)
+
+
+@pytest.mark.parametrize('angle', [0.0, 1e-9, 9.9e-7, 1.01e-6, 1e-4, 0.3, 2.0, 3.1])
+def test_rotvec_dcm_batch_and_small_inverse(angle):
+    u = np.array([2.0, -1.0, 0.5]) / np.linalg.norm([2.0, -1.0, 0.5])
+    v = angle * u
+    k = att.skew(u)
+    want = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k          # Rodrigues
+    c = att.rotvec_to_dcm_batch(np.stack([v, v]))
+    np.testing.assert_allclose(c[0], want, atol=1e-15)
+    np.testing.assert_allclose(att.dcm_to_rotvec_small(want), v, atol=1e-14)
