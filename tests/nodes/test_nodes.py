@@ -146,3 +146,11 @@ def test_parameters_are_frozen_while_running(ros):
     res = fut.result().results[0]
     assert not res.successful
     assert 'fixed while the node runs' in res.reason
+
+
+def test_default_params_file_is_the_catapult_scenario():
+    import yaml
+
+    from alignment_ros.params import flat_scenario
+    on_disk = yaml.safe_load(PARAMS.read_text())['/**']['ros__parameters']
+    assert on_disk == flat_scenario(scenario.load('catapult'))

@@ -61,6 +61,14 @@ class AircraftConfig:
                 f"misalignment_arcmin must be within +-600' per axis: {self.misalignment_arcmin}")
 
 
+def check_catapult_grid(cat: CatapultConfig, rate_hz: float) -> None:
+    """The stroke's start and end must be sample instants (no interval straddles them)."""
+    for name, t in (('launch_time_s', cat.launch_time_s),
+                    ('launch_time_s + stroke_s', cat.launch_time_s + cat.stroke_s)):
+        require(abs(t * rate_hz - round(t * rate_hz)) < 1e-6,
+                f"aircraft.catapult.{name} = {t} s must fall on the {rate_hz} Hz sample grid")
+
+
 class AircraftKinematics:
     """Relative motion on the deck, release state and ideal IMU increments."""
 
@@ -72,18 +80,24 @@ class AircraftKinematics:
         self.c_sa = Rotation.from_rotvec(self.mu).as_matrix()          # C_a^s
         self.track = self.c_sa[:, 0]                                     # aircraft x in ship axes
         cat = cfg.catapult
-        self.launch = cat.launch_time_s if cat.enabled else np.inf
-        self.release = cat.launch_time_s + cat.stroke_s if cat.enabled else np.inf
+        self.enabled = cat.enabled
         self.acc = cat.accel_g * G0
-        for name, t in (('launch_time_s', self.launch), ('launch + stroke', self.release)):
-            if np.isfinite(t):
-                require(abs(t * rate_hz - round(t * rate_hz)) < 1e-6,
-                        f"aircraft.catapult.{name} = {t} s must fall on the {rate_hz} Hz sample grid")
+        if cat.enabled:
+            check_catapult_grid(cat, rate_hz)
+            # launch and release as sample instants, computed exactly as tau is from stamps
+            dt_ns = int(round(1e9 / rate_hz))
+            self.launch = int(round(cat.launch_time_s * rate_hz)) * dt_ns / 1e9
+            self.release = int(round((cat.launch_time_s + cat.stroke_s) * rate_hz)) * dt_ns / 1e9
+        else:
+            self.launch = self.release = np.inf
         self.release_state: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def relative(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """r, r', r'' (..., 3) in ship axes at times tau (...) (s since scenario start), on deck."""
         tau = np.asarray(tau, dtype=float)
+        if not self.enabled:
+            z = np.zeros(tau.shape + (3,))
+            return self.r0 + z, z, z
         s_t = np.clip(tau - self.launch, 0.0, self.release - self.launch)
         moving = ((tau > self.launch) & (tau <= self.release)).astype(float)
         s = 0.5 * self.acc * s_t**2

@@ -73,7 +73,7 @@ def geodetic_to_ecef(lat, lon, h) -> np.ndarray:
 
 
 def ecef_to_geodetic(p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Geodetic (lat, lon, h) of ECEF points (..., 3); iterative, exact to < 1e-9 m."""
+    """Geodetic (lat, lon, h) of ECEF points (..., 3); iterative, to a few nm (double precision)."""
     p = np.asarray(p, dtype=float)
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     lon = np.arctan2(y, x)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import yaml
 
-from .aircraft import AircraftConfig
+from .aircraft import AircraftConfig, check_catapult_grid
 from .config import ConfigError, build, require, to_dict
 from .sensors import ImuConfig, LdvConfig, MasterConfig
 from .ship import ShipConfig
@@ -43,6 +43,8 @@ class Scenario:
                                          f"got {self.start_time_s}")
         require(abs(self.duration_s * self.rate_hz - round(self.duration_s * self.rate_hz)) < 1e-6,
                 "duration_s must be a whole number of samples")
+        if self.aircraft.catapult.enabled:
+            check_catapult_grid(self.aircraft.catapult, self.rate_hz)
 
     @property
     def dt_ns(self) -> int:
@@ -107,7 +109,8 @@ def from_dict(data: dict, overrides: dict[str, object] | None = None) -> Scenari
     data = copy.deepcopy(data) if data else {}
     for k, v in (overrides or {}).items():
         _set_dotted(data, k, v)
-    # the filter and the LDV know the surveyed deck spot unless told otherwise
+    # the filter and the LDV know the surveyed deck spot unless told otherwise; the LDV
+    # beam covers the catapult track (stroke length + 0.5 m), so matching ends at the release
     ac = data.get('aircraft') or {}
     if 'lever_arm_m' in ac:
         data.setdefault('filter', {})
@@ -118,6 +121,14 @@ def from_dict(data: dict, overrides: dict[str, object] | None = None) -> Scenari
         if data['ldv'] is None:
             data['ldv'] = {}
         data['ldv'].setdefault('origin_m', ac['lever_arm_m'])
+    cat = ac.get('catapult') or {}
+    if cat.get('enabled', True):
+        data.setdefault('ldv', {})
+        if data['ldv'] is None:
+            data['ldv'] = {}
+        stroke = float(cat.get('stroke_s', 3.0))
+        acc = float(cat.get('accel_g', 2.0)) * 9.80665
+        data['ldv'].setdefault('track_length_m', 0.5 * acc * stroke**2 + 0.5)
     return build(Scenario, data)
 
 

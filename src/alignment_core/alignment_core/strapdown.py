@@ -2,7 +2,8 @@
 
 Per interval of length h with increments (dtheta, dv) in body axes: two-sample coning and
 sculling corrections (using the previous interval's increments), rotation of the nav frame
-by zeta = omega_in h, velocity with gravity and Coriolis, trapezoidal position.
+by zeta = omega_in h, velocity with gravity and Coriolis at mid-interval (predictor-corrector),
+trapezoidal position.
 C_b^n(k) = exp(-[zeta x]) C_b^n(k-1) exp([phi x]).
 """
 from __future__ import annotations
@@ -70,28 +71,37 @@ class Strapdown:
 
     def update(self, dtheta: np.ndarray, dv: np.ndarray, h: float) -> np.ndarray:
         """Advance by one interval; returns the mean nav-frame specific force f^n (3,) and
-        leaves the Earth and transport rates used in `w_ie`, `w_en`."""
+        leaves the mid-interval Earth and transport rates used in `w_ie`, `w_en`.
+
+        Gravity, Coriolis and the nav-frame rotation are evaluated at mid-interval from a
+        predictor step (second order); the body-frame velocity increment carries rotation
+        compensation to second order in dtheta and two-sample sculling."""
         s = self.s
-        r_m, r_n, w_ie, w_en, g_mag = earth.local_scalar(s.lat, s.h, s.v_n)
-        self.w_ie, self.w_en = w_ie, w_en
-        w_in = w_ie + w_en
         phi = dtheta + cross3(s.prev_dtheta, dtheta) / 12.0
-        dv_b = dv + 0.5 * cross3(dtheta, dv) + (cross3(s.prev_dtheta, dv)
-                                                 + cross3(s.prev_dv, dtheta)) / 12.0
-        zeta = w_in * h
-        c = s.c_nb
-        dv_n = c @ dv_b
-        dv_n = dv_n - 0.5 * cross3(zeta, dv_n)
-        g = np.array([0.0, 0.0, -g_mag])
-        v_old = s.v_n
-        v_new = v_old + dv_n + (g - cross3(2.0 * w_ie + w_en, v_old)) * h
-        vm = 0.5 * (v_old + v_new)
-        s.lat = s.lat + h * vm[1] / (r_m + s.h)
-        s.lon = s.lon + h * vm[0] / ((r_n + s.h) * math.cos(s.lat))
+        rot = cross3(dtheta, dv)
+        dv_b = (dv + 0.5 * rot + cross3(dtheta, rot) / 6.0
+                + (cross3(s.prev_dtheta, dv) + cross3(s.prev_dv, dtheta)) / 12.0)
+        dv_sf = s.c_nb @ dv_b
+        v0 = s.v_n
+        # predictor at the start of the interval
+        r_m, r_n, w_ie, w_en, g = earth.local_scalar(s.lat, s.h, v0)
+        v1 = v0 + dv_sf + (np.array([0.0, 0.0, -g]) - cross3(2.0 * w_ie + w_en, v0)) * h
+        vm = 0.5 * (v0 + v1)
+        lat_m = s.lat + 0.5 * h * vm[1] / (r_m + s.h)
+        h_m = s.h + 0.5 * h * vm[2]
+        # corrector with mid-interval quantities
+        r_m, r_n, w_ie, w_en, g = earth.local_scalar(lat_m, h_m, vm)
+        self.w_ie, self.w_en = w_ie, w_en
+        zeta = (w_ie + w_en) * h
+        dv_n = dv_sf - 0.5 * cross3(zeta, dv_sf)
+        v_new = v0 + dv_n + (np.array([0.0, 0.0, -g]) - cross3(2.0 * w_ie + w_en, vm)) * h
+        vm = 0.5 * (v0 + v_new)
+        s.lat = s.lat + h * vm[1] / (r_m + h_m)
+        s.lon = s.lon + h * vm[0] / ((r_n + h_m) * math.cos(lat_m))
         s.h = s.h + h * vm[2]
         s.v_n = v_new
         q = quat_mul(rotvec_to_quat(-zeta), quat_mul(s.q_nb, rotvec_to_quat(phi)))
-        s.q_nb = q / np.sqrt(q @ q)
+        s.q_nb = q / math.sqrt(q @ q)
         s.prev_dtheta = dtheta
         s.prev_dv = dv
         return dv_n / h
