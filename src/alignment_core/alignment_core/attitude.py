@@ -77,10 +77,12 @@ def flu_to_rfu(v) -> np.ndarray:
 def quat_to_dcm_batch(q: np.ndarray) -> np.ndarray:
     """(..., 4) unit quaternions (x, y, z, w) -> (..., 3, 3) rotation matrices."""
     x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz, xw, yw, zw = x * y, x * z, y * z, x * w, y * w, z * w
+    m = np.stack([1 - 2 * (yy + zz), 2 * (xy - zw), 2 * (xz + yw),
+                  2 * (xy + zw), 1 - 2 * (xx + zz), 2 * (yz - xw),
+                  2 * (xz - yw), 2 * (yz + xw), 1 - 2 * (xx + yy)], -1)
+    return m.reshape(q.shape[:-1] + (3, 3))
 
 
 def rotvec_to_dcm_batch(v: np.ndarray) -> np.ndarray:
