@@ -23,7 +23,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import ARCMIN, G0, cross, quat_to_dcm_batch, rotvec_to_dcm_batch
+from .attitude import ARCMIN, G0, cross, quat_mul_batch, quat_to_dcm_batch, rotvec_to_dcm_batch
 from .config import require
 from .samples import AircraftTruth, ShipBatch, ShipSample
 
@@ -77,7 +77,8 @@ class AircraftKinematics:
         self.plane = plane
         self.r0 = np.asarray(cfg.lever_arm_m, dtype=float)
         self.mu = np.asarray(cfg.misalignment_arcmin, dtype=float) * ARCMIN
-        self.c_sa = Rotation.from_rotvec(self.mu).as_matrix()          # C_a^s
+        self.q_sa = Rotation.from_rotvec(self.mu).as_quat()
+        self.c_sa = quat_to_dcm_batch(self.q_sa)                         # C_a^s
         self.track = self.c_sa[:, 0]                                     # aircraft x in ship axes
         cat = cfg.catapult
         self.enabled = cat.enabled
@@ -153,11 +154,13 @@ class AircraftKinematics:
             if len(rel):
                 k = rel[0]
                 self.release_state = (c_na[k].copy(), v_p[k].copy(), p_p[k].copy())
+                self.release_quat = quat_mul_batch(sb.q_nb[k], self.q_sa)
+        q = quat_mul_batch(sb.q_nb, self.q_sa)
         if np.any(~on):
             if self.release_state is None:
                 raise RuntimeError('free flight before the release state was seen')
             c_na[~on], w_na[~on], v_p[~on], _, p_p[~on] = self._free(tau[~on])
-        q = Rotation.from_matrix(c_na).as_quat()
+            q[~on] = self.release_quat
         return {'p_w': p_p, 'q_nb': q, 'v_b': np.einsum('kji,kj->ki', c_na, v_p), 'w_b': w_na,
                 'on_deck': on}
 

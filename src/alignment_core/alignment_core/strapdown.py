@@ -71,7 +71,8 @@ class Strapdown:
 
     def update(self, dtheta: np.ndarray, dv: np.ndarray, h: float) -> np.ndarray:
         """Advance by one interval; returns the mean nav-frame specific force f^n (3,) and
-        leaves the mid-interval Earth and transport rates used in `w_ie`, `w_en`.
+        leaves the attitude at the start (`c_start`) and the mid-interval Earth and transport
+        rates used (`w_ie`, `w_en`).
 
         Gravity, Coriolis and the nav-frame rotation are evaluated at mid-interval from a
         predictor step (second order); the body-frame velocity increment carries rotation
@@ -81,7 +82,8 @@ class Strapdown:
         rot = cross3(dtheta, dv)
         dv_b = (dv + 0.5 * rot + cross3(dtheta, rot) / 6.0
                 + (cross3(s.prev_dtheta, dv) + cross3(s.prev_dv, dtheta)) / 12.0)
-        dv_sf = s.c_nb @ dv_b
+        self.c_start = c = s.c_nb
+        dv_sf = c @ dv_b
         v0 = s.v_n
         # predictor at the start of the interval
         r_m, r_n, w_ie, w_en, g = earth.local_scalar(s.lat, s.h, v0)

@@ -94,7 +94,8 @@ class Counters:
 
 
 def _finite(*arrays) -> bool:
-    return all(math.isfinite(a.sum()) for a in arrays)
+    """True if every element is finite (a NaN or inf anywhere makes the sum non-finite)."""
+    return math.isfinite(sum(map(np.sum, arrays)))
 
 
 class TransferAlignment:
@@ -167,9 +168,8 @@ class TransferAlignment:
             self.counters.imu_gaps += 1
         dth = (s.gyro - self.bg) * h
         dv = (s.accel - self.ba) * h
-        c_nb = self.ins.s.c_nb
         f_n = self.ins.update(dth, dv, h)
-        phi = vm.transition(c_nb, f_n, self.ins.w_ie, self.ins.w_en, h)
+        phi = vm.transition(self.ins.c_start, f_n, self.ins.w_ie, self.ins.w_en, h)
         qd = self._qd.get(h)
         if qd is None:
             qd = self._qd[h] = vm.process_noise(self.noise, h)

@@ -5,11 +5,13 @@ from __future__ import annotations
 import json
 import signal
 import sys
+import time
 from collections import Counter
 from pathlib import Path
 
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 
 from alignment_core.config import ConfigError
@@ -72,7 +74,7 @@ class CountingNode(Node):
     def stats(self) -> dict:
         return {'node': self.get_name(), 'published': dict(self.published),
                 'received': dict(self.received), 'rejected': dict(self.rejected),
-                'held_unsent': self.held()}
+                'held_unsent': self.held(), 'cpu_s': time.process_time()}
 
     def write_stats(self) -> None:
         path = self.get_parameter('stats_path').value
@@ -82,7 +84,10 @@ class CountingNode(Node):
 
 def run(node_factory, spin: bool = True) -> None:
     """Create the node (config errors exit with status 2 and a one-line reason), spin until
-    SIGINT/SIGTERM, then write stats and shut down."""
+    SIGINT/SIGTERM, then write stats and shut down.
+
+    The EventsExecutor dispatches several times faster than the wait-set executors; it is
+    spun from the main thread only (it runs no callbacks from a background thread)."""
     rclpy.init(args=sys.argv)
     stop = {'flag': False}
 
@@ -96,10 +101,13 @@ def run(node_factory, spin: bool = True) -> None:
         sys.exit(2)
     signal.signal(signal.SIGINT, handler)
     signal.signal(signal.SIGTERM, handler)
+    executor = EventsExecutor()
+    executor.add_node(node)
+    node.executor_ref = executor
     try:
         if spin:
             while rclpy.ok() and not stop['flag']:
-                rclpy.spin_once(node, timeout_sec=0.1)
+                executor.spin_once(timeout_sec=0.1)
         else:
             node.run(lambda: stop['flag'])
     finally:

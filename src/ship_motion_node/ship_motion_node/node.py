@@ -70,7 +70,6 @@ class ShipMotionNode(node_util.CountingNode):
         return pub.get_subscription_count() if pub is not None else self.count_subscribers(topic)
 
     def run(self, stop) -> None:
-        import rclpy
         if not self._wait_for_subscribers(stop):
             return
         sc = self.sc
@@ -99,7 +98,7 @@ class ShipMotionNode(node_util.CountingNode):
                 if lag > 0:
                     time.sleep(lag)
             if k % 50 == 0:
-                rclpy.spin_once(self, timeout_sec=0.0)
+                self.executor_ref.spin_once(timeout_sec=0.0)
         self.wait_acked(30.0)
         self.get_logger().info(f'done: {dict(self.published)}')
 

@@ -21,11 +21,13 @@ class KalmanFilter:
     def __init__(self, x0: np.ndarray, p0: np.ndarray) -> None:
         self.x = np.array(x0, dtype=float)
         self.P = np.array(p0, dtype=float)
+        self._eye = np.eye(len(self.x))
 
     def predict(self, phi: np.ndarray, qd: np.ndarray) -> None:
+        """x <- Phi x, P <- Phi P Phi^T + Qd (symmetric by construction up to round-off, which
+        the next update's symmetrisation removes)."""
         self.x = phi @ self.x
-        p = phi @ self.P @ phi.T + qd
-        self.P = 0.5 * (p + p.T)
+        self.P = phi @ self.P @ phi.T + qd
 
     def update(self, z: np.ndarray, h: np.ndarray, r: np.ndarray,
                gate_chi2: float | None = None) -> UpdateResult:
@@ -38,7 +40,7 @@ class KalmanFilter:
             return UpdateResult(y, s, nis, False)
         k = ph @ s_inv
         self.x = self.x + k @ y
-        ikh = np.eye(len(self.x)) - k @ h
+        ikh = self._eye - k @ h
         p = ikh @ self.P @ ikh.T + k @ r @ k.T
         self.P = 0.5 * (p + p.T)
         return UpdateResult(y, s, nis, True)

@@ -14,8 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..attitude import skew
-
 LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dV_U', 'eps_x', 'eps_y', 'eps_z',
           'nabla_x', 'nabla_y', 'nabla_z')
 N = 12
@@ -38,12 +36,23 @@ def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.nda
                h: float) -> np.ndarray:
     """Phi (12, 12) over an interval h, from the mean attitude, specific force and rates."""
     fh = np.zeros((N, N))
-    fh[0:3, 0:3] = skew(-h * (w_ie + w_en))
+    _skew_into(fh, 0, 0, -h * (w_ie + w_en))
     fh[0:3, 6:9] = -h * c_nb
-    fh[3:6, 0:3] = skew(h * f_n)
-    fh[3:6, 3:6] = skew(-h * (2.0 * w_ie + w_en))
+    _skew_into(fh, 3, 0, h * f_n)
+    _skew_into(fh, 3, 3, -h * (2.0 * w_ie + w_en))
     fh[3:6, 9:12] = h * c_nb
     return _EYE + fh + 0.5 * (fh @ fh)
+
+
+def _skew_into(m: np.ndarray, r: int, c: int, v: np.ndarray) -> None:
+    """Write [v x] into the 3x3 block of m at (r, c) (faster than building it apart)."""
+    x, y, z = v[0], v[1], v[2]
+    m[r, c + 1] = -z
+    m[r, c + 2] = y
+    m[r + 1, c] = z
+    m[r + 1, c + 2] = -x
+    m[r + 2, c] = -y
+    m[r + 2, c + 1] = x
 
 
 def process_noise(q: NoiseDensities, h: float) -> np.ndarray:
