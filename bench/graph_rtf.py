@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import tempfile
 import time
@@ -30,9 +29,8 @@ ROOT = Path(__file__).resolve().parents[1]
 def graph(rtf: float) -> dict:
     with tempfile.TemporaryDirectory() as d:
         out = Path(d) / 'run'
-        env = dict(os.environ, ROS_DOMAIN_ID=str(150 + int(rtf)))
         p = subprocess.run([str(ROOT / 'scripts/run_graph.sh'), '--out', str(out),
-                            '--real-time-factor', str(rtf)], env=env, capture_output=True, text=True)
+                            '--real-time-factor', str(rtf)], capture_output=True, text=True)
         if p.returncode != 0:
             raise RuntimeError(p.stderr)
         s = json.loads((out / 'summary.json').read_text())

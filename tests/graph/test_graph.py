@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 from pathlib import Path
 
@@ -16,20 +15,13 @@ ROOT = Path(__file__).resolve().parents[2]
 SETS = ['duration_s=12.0', 'aircraft.catapult.launch_time_s=8.0', 'seed=7']
 
 
-def _env(domain: int) -> dict:
-    env = dict(os.environ)
-    env['ROS_DOMAIN_ID'] = str(domain)
-    return env
-
-
 @pytest.fixture(scope='module')
 def graph_run(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp('graph') / 'run'
     cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(out)]
     for s in SETS:
         cmd += ['--set', s]
-    p = subprocess.run(cmd, env=_env(61 + os.getpid() % 50), capture_output=True, text=True,
-                       timeout=300)
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stdout + p.stderr
     assert 'lost messages: 0' in p.stdout
     return out
@@ -39,7 +31,7 @@ def graph_run(tmp_path_factory) -> Path:
 def replay_run(graph_run, tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp('replay') / 'run'
     p = subprocess.run([str(ROOT / 'scripts/replay.sh'), str(graph_run), '--out', str(out)],
-                       env=_env(120 + os.getpid() % 50), capture_output=True, text=True, timeout=300)
+                       capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stdout + p.stderr
     return out
 

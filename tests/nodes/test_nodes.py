@@ -20,20 +20,16 @@ from sensor_msgs.msg import Imu
 from alignment_core import pipeline, scenario
 from alignment_core.attitude import DEG
 from alignment_core.sensors import MasterInsModel
-from alignment_ros import convert, qos, topics
+from alignment_ros import convert, domain, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]
 PARAMS = ROOT / 'config/params/graph.yaml'
 SC = scenario.load('catapult')
 
 
-def _domain(k: int) -> int:
-    return 170 + (os.getpid() * 7 + k) % 60
-
-
 @pytest.fixture
-def ros(request):
-    dom = _domain(hash(request.node.name) % 1000)
+def ros():
+    dom = domain.claim()
     rclpy.init(domain_id=dom)
     node = rclpy.create_node('test_driver')
     procs = []
@@ -55,6 +51,7 @@ def ros(request):
                 os.killpg(p.pid, signal.SIGKILL)
     node.destroy_node()
     rclpy.shutdown()
+    domain.release(dom)
 
 
 def _wait(node, cond, timeout=30.0) -> None:

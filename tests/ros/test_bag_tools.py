@@ -11,7 +11,6 @@ import os
 import subprocess
 import sys
 import time
-import zlib
 from pathlib import Path
 
 import pytest
@@ -44,14 +43,13 @@ NS = 1_000_000_000
 
 @pytest.fixture
 def domain_id(monkeypatch: pytest.MonkeyPatch, request: pytest.FixtureRequest) -> int:
-    """A ROS_DOMAIN_ID in 1..101 (not the default 42) unique to this process and test."""
-    key = f'{os.getpid()}:{request.node.nodeid}'.encode()
-    dom = 1 + zlib.crc32(key) % 100
-    if dom == 42:
-        dom = 43
+    """A ROS_DOMAIN_ID of its own (claimed by lock: no other run of ours uses it meanwhile)."""
+    from alignment_ros import domain
+    dom = domain.claim()
     monkeypatch.setenv('ROS_DOMAIN_ID', str(dom))
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    return dom
+    yield dom
+    domain.release(dom)
 
 
 @pytest.fixture

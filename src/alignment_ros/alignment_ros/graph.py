@@ -21,7 +21,7 @@ import yaml
 from alignment_core import scenario as core_scenario
 from alignment_core.config import ConfigError
 
-from . import summary, topics
+from . import domain, summary, topics
 from .params import flat_scenario
 
 # matched subscriptions (recorder included) each node waits for before it sends on a topic
@@ -43,6 +43,14 @@ END_TOPICS = (topics.SHIP_ODOM, topics.MASTER_ODOM, topics.AIRCRAFT_IMU, topics.
 
 def root() -> Path:
     return Path(os.environ.get('ALIGN_ROOT', Path(__file__).resolve().parents[3]))
+
+
+def use_domain(preferred: int | None) -> int:
+    """Claim a ROS domain for this run and export it to the processes it starts."""
+    dom = domain.claim(preferred)
+    os.environ['ROS_DOMAIN_ID'] = str(dom)
+    print(f'ROS_DOMAIN_ID={dom}  (to watch: ROS_DOMAIN_ID={dom} scripts/echo.sh TOPIC)', flush=True)
+    return dom
 
 
 def write_params(sc: core_scenario.Scenario, path: Path, extra: dict | None = None) -> None:
@@ -106,6 +114,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument('--set', dest='sets', action='append', default=[], metavar='KEY=VALUE')
     ap.add_argument('--real-time-factor', type=float, default=5.0)
     ap.add_argument('--timeout', type=float, default=None, help='wall seconds before giving up')
+    ap.add_argument('--domain-id', type=int, default=None,
+                    help='ROS_DOMAIN_ID for the run (default: a free one, printed at the start)')
     a = ap.parse_args(argv)
     try:
         sc = core_scenario.load(a.scenario, core_scenario.parse_overrides(a.sets), a.seed)
@@ -118,6 +128,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     for d in ('logs', 'stats'):
         (out / d).mkdir(parents=True, exist_ok=True)
+    use_domain(a.domain_id)
     (out / 'scenario.yaml').write_text(core_scenario.dump(sc))
     params = out / 'params.yaml'
     write_params(sc, params)

@@ -13,7 +13,7 @@ import rclpy
 
 from . import summary, topics
 from .bag import BagError, BagReader
-from .graph import root, start, start_recorder, stop
+from .graph import root, start, start_recorder, stop, use_domain
 from .topics import FILTER_OUTPUT_TOPICS, SENSOR_TOPICS
 
 HOLD = 'hold_until_matched:=[' + ','.join(f'"{t}:1"' for t in FILTER_OUTPUT_TOPICS) + ']'
@@ -43,6 +43,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument('--out', type=Path, default=None)
     ap.add_argument('--params-file', type=Path, default=None,
                     help="filter parameters (default: the run's params.yaml next to the bag)")
+    ap.add_argument('--domain-id', type=int, default=None,
+                    help='ROS_DOMAIN_ID for the replay (default: a free one, printed at the start)')
     a = ap.parse_args(argv)
     bag = a.bag / 'bag' if (a.bag / 'bag').is_dir() else a.bag
     params = a.params_file or bag.parent / 'params.yaml'
@@ -61,6 +63,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     for d in ('logs', 'stats'):
         (out / d).mkdir(parents=True, exist_ok=True)
+    use_domain(a.domain_id)
     procs: dict[str, subprocess.Popen] = {}
     wall0 = time.monotonic()
     try:
