@@ -130,3 +130,8 @@ def quat_mul_batch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
                      aw * by - ax * bz + ay * bw + az * bx,
                      aw * bz + ax * by - ay * bx + az * bw,
                      aw * bw - ax * bx - ay * by - az * bz], axis=-1)
+
+
+def rotvec_to_dcm_small(v: np.ndarray) -> np.ndarray:
+    """Rotation matrix of a 3-vector rotation vector (Rodrigues; exact, cheap for one vector)."""
+    return rotvec_to_dcm_batch(np.asarray(v, dtype=float))

@@ -5,8 +5,9 @@ Events at equal stamps run IMU first, then LDV, then master: the IMU sample stam
 the interval at t, so the slave solution is at t when the master sample at t is matched.
 Initialisation (first master sample): the slave copies the master attitude (times the
 nominal mounting), velocity and position at its lever arm. Velocity matching with
-computational lever-arm compensation; the deck displacement of the aircraft is the
-integral of the LDV velocity. Closed loop: each update is fed back into the strapdown.
+computational lever-arm compensation. The aircraft is parked (zero deck velocity, surveyed
+spot) until the LDV sees it move; from then on its deck displacement is the integral of the
+LDV velocity. Closed loop: each update is fed back into the strapdown.
 
 Published misalignment: mu_hat = log(C_m^n^T C_a^n_hat), the aircraft IMU axes relative to
 the master's (aircraft FLU axes), evaluated at each matching update and held once matching
@@ -21,7 +22,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import DEG, DPH, cross3, dcm_to_rotvec_small
+from .attitude import ARCMIN, DEG, DPH, cross3, dcm_to_rotvec_small, rotvec_to_dcm_small
 from .config import require
 from .filters.kalman import KalmanFilter
 from .models import velocity_matching as vm
@@ -48,13 +49,19 @@ class FilterConfig:
     accel_bias_rw_ugps: float = 0.0
     ldv_sigma_mps: float = 0.01
     master_velocity_sigma_mps: float = 0.001
+    parked_velocity_sigma_mps: float = 0.005
+    launch_detect_mps: float = 0.05
+    master_attitude_states: bool = True
+    master_tilt_sigma_arcmin: float = 0.2
+    master_heading_sigma_arcmin: float = 0.5
     output_rate_hz: float = 10.0
     gate_chi2: float = 0.0
     max_gap_factor: float = 1.5
 
     def validate(self) -> None:
         for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
-                  'accel_bias_sigma_ug', 'ldv_sigma_mps', 'output_rate_hz'):
+                  'accel_bias_sigma_ug', 'ldv_sigma_mps', 'output_rate_hz', 'parked_velocity_sigma_mps',
+                  'launch_detect_mps'):
             require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
         for k in ('arw_dpsh', 'vrw_ugpshz', 'gyro_bias_rw_dphps', 'accel_bias_rw_ugps',
                   'master_velocity_sigma_mps', 'gate_chi2'):
@@ -70,8 +77,8 @@ class Estimate:
     misalignment_sigma: np.ndarray    # (3,) rad
     q_nb: np.ndarray                  # (4,) aligned slave attitude
     attitude_cov: np.ndarray          # (3, 3) rad^2, nav frame (phi)
-    x: np.ndarray                     # (12,) last a-posteriori error state (before feedback)
-    sigma: np.ndarray                 # (12,) 1-sigma of the error state
+    x: np.ndarray                     # (n,) last a-posteriori error state (before feedback)
+    sigma: np.ndarray                 # (n,) 1-sigma of the error state (n = 12 or 15)
     bias_gyro: np.ndarray             # (3,) accumulated gyro bias estimate, rad/s
     bias_accel: np.ndarray            # (3,) accumulated accelerometer bias estimate, m/s^2
     nis: float
@@ -109,11 +116,14 @@ class TransferAlignment:
         self.imu_dt_nominal = 1.0 / imu_rate_hz
         self.out_period_ns = int(round(1e9 / cfg.output_rate_hz))
         self.r0 = np.asarray(cfg.lever_arm_m, dtype=float)
+        self.n = 15 if cfg.master_attitude_states else vm.N
+        self.labels = vm.labels(cfg.master_attitude_states)
         self.noise = vm.NoiseDensities(
             arw=cfg.arw_dpsh * DEG / 60.0, vrw=cfg.vrw_ugpshz * UG,
             gyro_bias_rw=cfg.gyro_bias_rw_dphps * DPH, accel_bias_rw=cfg.accel_bias_rw_ugps * UG)
-        sv = cfg.ldv_sigma_mps**2 + cfg.master_velocity_sigma_mps**2
-        self.R = np.eye(3) * sv
+        self.R_moving = np.eye(3) * (cfg.ldv_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
+        self.R_parked = np.eye(3) * (cfg.parked_velocity_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
+        self.moving = False
         self.ins: Strapdown | None = None
         self.kf: KalmanFilter | None = None
         self.t_ins: int | None = None
@@ -124,7 +134,7 @@ class TransferAlignment:
         self.last_ldv: LdvSample | None = None
         self.mu = np.zeros(3)
         self.mu_sigma = np.full(3, cfg.init_attitude_sigma_deg * DEG)
-        self.last_x = np.zeros(vm.N)
+        self.last_x = np.zeros(self.n)
         self.last_nis = math.nan
         self.matching = False
         self.outputs: list[Estimate] = []
@@ -169,17 +179,23 @@ class TransferAlignment:
         dth = (s.gyro - self.bg) * h
         dv = (s.accel - self.ba) * h
         f_n = self.ins.update(dth, dv, h)
-        phi = vm.transition(self.ins.c_start, f_n, self.ins.w_ie, self.ins.w_en, h)
+        phi = vm.transition(self.ins.c_start, f_n, self.ins.w_ie, self.ins.w_en, h, self.n)
         qd = self._qd.get(h)
         if qd is None:
-            qd = self._qd[h] = vm.process_noise(self.noise, h)
+            qd = self._qd[h] = vm.process_noise(self.noise, h, self.n)
         self.kf.predict(phi, qd)
         self.t_ins = t
 
     def _on_ldv(self, t: int, s: LdvSample) -> None:
+        """Parked (held back) until the LDV first reads more than `launch_detect_mps`: until
+        then the aircraft's deck velocity is zero and its spot fixed, so LDV noise is neither
+        integrated into the lever arm (a random walk of ~2 cm over 300 s, which through
+        w' x dr looks like tens of ug) nor added to the reference velocity."""
         self.counters.ldv += 1
         prev = self.last_ldv
-        if s.valid and prev is not None and prev.valid:
+        if s.valid and not self.moving and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps:
+            self.moving = True
+        if self.moving and s.valid and prev is not None and prev.valid:
             self.deck_disp += 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
         self.last_ldv = s
 
@@ -188,12 +204,13 @@ class TransferAlignment:
         c_m = quat_to_dcm(m.q_nb)
         r = self.r0 + self.deck_disp if self.cfg.lever_arm_compensation else self.deck_disp
         ldv = self.last_ldv if (self.last_ldv is not None and self.last_ldv.t_ns == t) else None
-        v_rel = ldv.v_s if (ldv is not None and ldv.valid) else np.zeros(3)
-        v_ref = c_m @ (m.v_b + cross3(m.w_b, r) + v_rel)
+        v_rel = ldv.v_s if (ldv is not None and ldv.valid and self.moving) else np.zeros(3)
+        u_n = c_m @ (cross3(m.w_b, r) + v_rel)
+        v_ref = c_m @ m.v_b + u_n
         if self.ins is None:
             self._initialise(t, m, c_m, r, v_ref)
         elif ldv is not None and ldv.valid and t == self.t_ins:
-            self._update(c_m, v_ref)
+            self._update(c_m, v_ref, u_n)
             self.matching = True
         else:
             self.matching = False
@@ -210,16 +227,19 @@ class TransferAlignment:
             np.full(3, (cfg.init_attitude_sigma_deg * DEG) ** 2),
             np.full(3, cfg.init_velocity_sigma_mps ** 2),
             np.full(3, (cfg.gyro_bias_sigma_dph * DPH) ** 2),
-            np.full(3, (cfg.accel_bias_sigma_ug * UG) ** 2)]))
-        self.kf = KalmanFilter(np.zeros(vm.N), p0)
+            np.full(3, (cfg.accel_bias_sigma_ug * UG) ** 2),
+            np.array([cfg.master_tilt_sigma_arcmin, cfg.master_tilt_sigma_arcmin,
+                      cfg.master_heading_sigma_arcmin]) ** 2 * ARCMIN**2][:self.n // 3]))
+        self.kf = KalmanFilter(np.zeros(self.n), p0)
         self.t_ins = t
         self.t0 = t
 
-    def _update(self, c_m: np.ndarray, v_ref: np.ndarray) -> None:
+    def _update(self, c_m: np.ndarray, v_ref: np.ndarray, u_n: np.ndarray) -> None:
         st = self.ins.s
         z = st.v_n - v_ref
         gate = self.cfg.gate_chi2 if self.cfg.gate_chi2 > 0.0 else None
-        res = self.kf.update(z, vm.H, self.R, gate)
+        r = self.R_moving if self.moving else self.R_parked
+        res = self.kf.update(z, vm.measurement(u_n, self.n), r, gate)
         self.last_nis = res.nis
         if not res.accepted:
             self.counters.gated += 1
@@ -233,11 +253,19 @@ class TransferAlignment:
         st.v_n = st.v_n - x[3:6]
         self.bg = self.bg + x[6:9]
         self.ba = self.ba + x[9:12]
-        self.kf.x = np.zeros(vm.N)
+        x_new = np.zeros(self.n)
+        x_new[12:] = x[12:]                 # the master's attitude error is not fed back
+        self.kf.x = x_new
         c_na = quat_to_dcm(st.q_nb)
+        p = self.kf.P
+        if self.n == 15:
+            # best estimate of the master's true attitude: C_m = (I + [phi_m x]) C_m,est
+            c_m = rotvec_to_dcm_small(x[12:15]) @ c_m
+            p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
+        else:
+            p_rel = p[0:3, 0:3]
         self.mu = dcm_to_rotvec_small(c_m.T @ c_na)
-        p_att = c_na.T @ self.kf.P[0:3, 0:3] @ c_na
-        self.mu_sigma = np.sqrt(np.diag(p_att))
+        self.mu_sigma = np.sqrt(np.diag(c_na.T @ p_rel @ c_na))
 
     def _emit(self, t: int) -> None:
         st = self.ins.s
