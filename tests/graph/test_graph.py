@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 from pathlib import Path
 
@@ -17,13 +18,24 @@ SETS = ['duration_s=12.0', 'aircraft.catapult.launch_time_s=8.0', 'seed=7']
 
 @pytest.fixture(scope='module')
 def graph_run(tmp_path_factory) -> Path:
+    """One short catapult run through the graph; while it runs, echo.sh prints one live
+    /alignment/misalignment message (saved as echo.txt next to the run)."""
     out = tmp_path_factory.mktemp('graph') / 'run'
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(out)]
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(out),
+           '--real-time-factor', '2']
     for s in SETS:
         cmd += ['--set', s]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-    assert p.returncode == 0, p.stdout + p.stderr
-    assert 'lost messages: 0' in p.stdout
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    first = p.stdout.readline()
+    assert first.startswith('ROS_DOMAIN_ID='), first + p.stderr.read()
+    dom = first.split()[0].split('=')[1]
+    echo = subprocess.run([str(ROOT / 'scripts/echo.sh'), '/alignment/misalignment', '--once',
+                           '--timeout', '60'], env=dict(os.environ, ROS_DOMAIN_ID=dom),
+                          capture_output=True, text=True, timeout=120)
+    stdout, stderr = p.communicate(timeout=300)
+    assert p.returncode == 0, stdout + stderr
+    assert 'lost messages: 0' in stdout
+    (out / 'echo.txt').write_text(echo.stdout if echo.returncode == 0 else f'FAILED: {echo.stderr}')
     return out
 
 
@@ -121,6 +133,21 @@ def test_filter_never_reads_truth(graph_run):
     assert set(stats['received']) == {'/aircraft/imu', '/master/odom', '/ldv/twist'}
     src = (ROOT / 'src/alignment_filter_node/alignment_filter_node/node.py').read_text()
     assert '/truth' not in src and 'TRUTH' not in src
+
+
+def test_echo_prints_a_live_estimate_like_ros2_topic_echo(graph_run):
+    text = (graph_run / 'echo.txt').read_text()
+    doc, sep, rest = text.partition('\n---\n')
+    assert sep and rest == '', text
+    msg = yaml.safe_load(doc)
+    assert set(msg) == {'header', 'vector'}
+    assert msg['header']['frame_id'] == 'aircraft'
+    assert set(msg['header']['stamp']) == {'sec', 'nanosec'}
+    # the echoed message is one the recorder stored, digit for digit
+    t_ns = msg['header']['stamp']['sec'] * 1_000_000_000 + msg['header']['stamp']['nanosec']
+    t_g, mu_g = _bag_estimates(graph_run / 'bag')
+    i = int(np.flatnonzero(t_g == t_ns)[0])
+    assert [msg['vector'][a] for a in 'xyz'] == mu_g[i].tolist()
 
 
 def test_invalid_scenario_value_fails_with_named_key(tmp_path):
