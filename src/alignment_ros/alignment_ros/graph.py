@@ -162,9 +162,7 @@ def main(argv: list[str] | None = None) -> int:
     s = summary.summarise(out / 'bag', out / 'bag', sc.duration_s, wall, published_counts(out))
     s['scenario'] = sc.name
     s['seed'] = sc.seed
-    summary.write(s, out)
-    print(summary.table(s))
-    print(f'output: {out}')
+    summary.report(s, out)
     return 0
 
 

@@ -82,6 +82,17 @@ class CountingNode(Node):
             Path(path).write_text(json.dumps(self.stats(), indent=1))
 
 
+def stop_on_signals() -> dict[str, bool]:
+    """SIGINT/SIGTERM set the returned dict's 'signal' flag (for a main loop to poll)."""
+    stop = {'signal': False}
+
+    def on_signal(signum: int, frame: object) -> None:
+        stop['signal'] = True
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    return stop
+
+
 def run(node_factory, spin: bool = True) -> None:
     """Create the node (config errors exit with status 2 and a one-line reason), spin until
     SIGINT/SIGTERM, then write stats and shut down.
@@ -89,27 +100,22 @@ def run(node_factory, spin: bool = True) -> None:
     The EventsExecutor dispatches several times faster than the wait-set executors; it is
     spun from the main thread only (it runs no callbacks from a background thread)."""
     rclpy.init(args=sys.argv)
-    stop = {'flag': False}
-
-    def handler(signum, frame):
-        stop['flag'] = True
     try:
         node = node_factory()
     except ConfigError as e:
         print(f'invalid configuration: {e}', file=sys.stderr, flush=True)
         rclpy.try_shutdown()
         sys.exit(2)
-    signal.signal(signal.SIGINT, handler)
-    signal.signal(signal.SIGTERM, handler)
+    stop = stop_on_signals()
     executor = EventsExecutor()
     executor.add_node(node)
     node.executor_ref = executor
     try:
         if spin:
-            while rclpy.ok() and not stop['flag']:
+            while rclpy.ok() and not stop['signal']:
                 executor.spin_once(timeout_sec=0.1)
         else:
-            node.run(lambda: stop['flag'])
+            node.run(lambda: stop['signal'])
     finally:
         if hasattr(node, 'finish'):
             node.finish()

@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import signal
 import sys
 import time
 from pathlib import Path
@@ -30,6 +29,7 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from alignment_ros.bag import BagError, BagReader
+from alignment_ros.node_util import stop_on_signals
 from alignment_ros.qos import STREAM
 from alignment_ros.topics import msg_class
 
@@ -97,14 +97,8 @@ def play(args: argparse.Namespace, reader: BagReader, ros_argv: list[str]) -> di
     unknown += [t for t, _ in args.wait_subscribers if t not in topics]
     if unknown:
         raise RuntimeError(f'topics not in the bag (or not played): {", ".join(unknown)}')
-    stop = {'signal': False}
-
-    def on_signal(signum: int, frame: object) -> None:
-        stop['signal'] = True
-
     rclpy.init(args=ros_argv, signal_handler_options=SignalHandlerOptions.NO)
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
+    stop = stop_on_signals()
     node = Node('player', parameter_overrides=[Parameter('use_sim_time', value=False)])
     counts = dict.fromkeys(topics, 0)
     acked = True

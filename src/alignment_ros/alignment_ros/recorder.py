@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import signal
 import sys
 import time
 from pathlib import Path
@@ -39,6 +38,7 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from alignment_ros.bag import BagError, BagWriter, stamp_reader
+from alignment_ros.node_util import stop_on_signals
 from alignment_ros.qos import STREAM
 from alignment_ros.topics import CLOCK, TOPIC_TYPES, msg_class
 
@@ -167,14 +167,8 @@ def make_executor(kind: str) -> Any:
 
 def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     """Record until an end condition; return the stats dict."""
-    stop = {'signal': False}
-
-    def on_signal(signum: int, frame: object) -> None:
-        stop['signal'] = True
-
     rclpy.init(args=ros_argv, signal_handler_options=SignalHandlerOptions.NO)
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
+    stop = stop_on_signals()
     node = Node('recorder', parameter_overrides=[Parameter('use_sim_time', value=False)])
     executor = make_executor(args.executor)
     writer = BagWriter(args.out)

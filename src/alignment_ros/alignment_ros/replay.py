@@ -92,9 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     sim = (end_ns - min(m.t_ns for m in BagReader(bag).messages([topics.MASTER_ODOM]))) * 1e-9
     s = summary.summarise(bag, out / 'bag', sim, wall, pub)
     s['replayed_from'] = str(bag)
-    summary.write(s, out)
-    print(summary.table(s))
-    print(f'output: {out}')
+    summary.report(s, out)
     return 0
 
 

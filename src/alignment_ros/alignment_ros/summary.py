@@ -98,3 +98,10 @@ def table(s: dict) -> str:
 
 def write(s: dict, out: Path) -> None:
     (Path(out) / 'summary.json').write_text(json.dumps(s, indent=1))
+
+
+def report(s: dict, out: Path) -> None:
+    """Write summary.json into `out` and print the table and where the run is."""
+    write(s, out)
+    print(table(s))
+    print(f'output: {out}')
