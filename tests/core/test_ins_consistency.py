@@ -106,16 +106,20 @@ def test_catapult_stroke_kinematics(catapult_run):
     k_rel = int(np.flatnonzero(np.isclose(tau, cat.launch_time_s + t_stroke))[0])
     assert truth['on_deck'][k_rel] and not truth['on_deck'][k_rel + 1]
 
-    # from truth: aircraft position relative to the master INS, in ship axes
+    # from truth: aircraft position relative to the master INS, in ship axes (world positions
+    # are in the tangent plane at the origin: rotate the difference into the local level first)
+    plane = pipeline.plane_of(sc)
+
     def rel(k):
         s = ship_list[k]
-        return Rotation.from_quat(s.q_nb).inv().apply(truth['p_w'][k] - s.p_w)
+        d_local = plane.c_local_to_world(s.p_w).T @ (truth['p_w'][k] - s.p_w)
+        return Rotation.from_quat(s.q_nb).inv().apply(d_local)
     np.testing.assert_allclose(rel(k_launch), r0, atol=1e-6)
     np.testing.assert_allclose(rel(k_rel) - r0, s_end * track, atol=1e-6)
 
     # from a noise-free LDV: integrate the relative velocity over the stroke (trapezoid is
     # exact for a velocity linear in time)
-    ldv = LdvModel(LdvConfig(noise_mps=1e-9, origin_m=tuple(r0)), sc.seed)
+    ldv = LdvModel(LdvConfig(noise_mps=1e-9, origin_m=tuple(r0)), sc.seed, pipeline.plane_of(sc))
     samples = []
     for k in range(k_launch, k_rel + 1):
         tr = AircraftTruth(t_ns=ship_list[k].t_ns, p_w=truth['p_w'][k], q_nb=truth['q_nb'][k],
@@ -148,7 +152,7 @@ def test_release_off_exact_float_sum():
     k_rel = int(np.flatnonzero(on)[-1])
     mu = np.asarray(sc.aircraft.misalignment_arcmin) * ARCMIN
     track = Rotation.from_rotvec(mu).as_matrix()[:, 0]
-    ldv = LdvModel(LdvConfig(noise_mps=1e-9, origin_m=tuple(sc.aircraft.lever_arm_m)), sc.seed)
+    ldv = LdvModel(LdvConfig(noise_mps=1e-9, origin_m=tuple(sc.aircraft.lever_arm_m)), sc.seed, pipeline.plane_of(sc))
     ld = ldv.measure(pipeline.ship_samples(sc)[k_rel], res.truth[k_rel])
     np.testing.assert_allclose(ld.v_s, 2.0 * G0 * 2.2 * track, atol=1e-6)
     v_n = np.array([Rotation.from_quat(t.q_nb).apply(t.v_b) for t in res.truth])

@@ -114,7 +114,9 @@ class AircraftKinematics:
         v_p = v_n + np.einsum('...ij,...j->...i', c_nb, wxr + rd)
         a_rel = cross(wd, r) + cross(w, wxr) + 2.0 * cross(w, rd) + rdd
         a_p = a_n + np.einsum('...ij,...j->...i', c_nb, a_rel)
-        p_p = p_w + np.einsum('...ij,...j->...i', c_nb, r)
+        # C r is in the local-level frame at the ship; p_w in the world tangent plane
+        p_p = p_w + np.einsum('...ij,...j->...i', self.plane.c_local_to_world(p_w),
+                              np.einsum('...ij,...j->...i', c_nb, r))
         c_na = c_nb @ self.c_sa                                          # C_a^n
         w_na = w @ self.c_sa                                             # C_s^a w (row form)
         return c_na, w_na, v_p, a_p, p_p
@@ -124,7 +126,7 @@ class AircraftKinematics:
         tau = np.asarray(tau, dtype=float)
         c_na = np.broadcast_to(c_rel, tau.shape + (3, 3))
         v_p = np.broadcast_to(v_rel, tau.shape + (3,))
-        p_p = p_rel + (tau - self.release)[..., None] * v_rel
+        p_p = p_rel + (tau - self.release)[..., None] * self.release_v_world
         return c_na, np.zeros(tau.shape + (3,)), v_p, np.zeros(tau.shape + (3,)), p_p
 
     def _imu(self, c_na, w_na, v_p, a_p, p_p):
@@ -155,6 +157,7 @@ class AircraftKinematics:
                 k = rel[0]
                 self.release_state = (c_na[k].copy(), v_p[k].copy(), p_p[k].copy())
                 self.release_quat = quat_mul_batch(sb.q_nb[k], self.q_sa)
+                self.release_v_world = self.plane.c_local_to_world(p_p[k]) @ v_p[k]
         q = quat_mul_batch(sb.q_nb, self.q_sa)
         if np.any(~on):
             if self.release_state is None:

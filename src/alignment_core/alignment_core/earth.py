@@ -106,6 +106,16 @@ class TangentPlane:
     def to_geodetic(self, enu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return ecef_to_geodetic(np.asarray(enu) @ self.c + self.origin)
 
+    def c_local_to_world(self, p_w) -> np.ndarray:
+        """(..., 3, 3) rotation from the local-level ENU frame at world point(s) p_w (..., 3) to
+        the world axes (they differ by distance / Earth radius: 1e-3 rad at 6 km)."""
+        lat, lon, _ = self.to_geodetic(p_w)
+        sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
+        z = np.zeros_like(lat)
+        c_el = np.stack([np.stack([-so, co, z], -1), np.stack([-sl * co, -sl * so, cl], -1),
+                         np.stack([cl * co, cl * so, sl], -1)], -2)       # ECEF -> local ENU
+        return self.c @ np.swapaxes(c_el, -1, -2)
+
 
 def local_scalar(lat: float, h: float, v_n: np.ndarray
                  ) -> tuple[float, float, np.ndarray, np.ndarray, float]:

@@ -13,7 +13,7 @@ from .attitude import ARCMIN, DEG
 from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipBatch, ShipSample
 from .scenario import Scenario, tau_of
 from .sensors import ImuErrorModel, LdvModel, MasterInsModel
-from .ship import PaperShipMotion
+from .ship import PaperShipMotion, make_motion
 from .transfer_alignment import Estimate, TransferAlignment
 
 
@@ -64,7 +64,9 @@ class BatchResult:
 
 
 def ship_source(sc: Scenario) -> PaperShipMotion:
-    return PaperShipMotion(sc.ship, sc.seed)
+    """The ship model for `sc.ship.mode` ('paper' or 'spectral'); both have
+    `samples(t, t0_ns, dt_ns, k0)`."""
+    return make_motion(sc.ship, sc.seed)
 
 
 def ship_samples(sc: Scenario) -> list[ShipSample]:
@@ -89,7 +91,7 @@ def simulate(sc: Scenario) -> Inputs:
     ships = ShipBatch.of(ship_samples(sc))
     truth, imu = SlaveImuStage(sc).run_batch(ships)
     master = MasterInsModel(sc.master, sc.seed, sc.ship.lat_deg * DEG).measure_batch(ships)
-    ldv = LdvModel(sc.ldv, sc.seed).measure_batch(ships, truth['p_w'], truth['q_nb'], truth['v_b'])
+    ldv = LdvModel(sc.ldv, sc.seed, plane_of(sc)).measure_batch(ships, truth['p_w'], truth['q_nb'], truth['v_b'])
     return Inputs(ships, truth, imu, master, ldv)
 
 

@@ -140,9 +140,10 @@ class LdvConfig:
 class LdvModel:
     """Relative velocity of the aircraft w.r.t. the deck, from ship and aircraft truth."""
 
-    def __init__(self, cfg: LdvConfig, seed: int) -> None:
+    def __init__(self, cfg: LdvConfig, seed: int, plane: earth.TangentPlane) -> None:
         self.cfg = cfg
         self.rng = stage_rng(seed, 'ldv')
+        self.plane = plane
 
     def measure(self, s: ShipSample, a: AircraftTruth) -> LdvSample:
         return self.measure_batch(ShipBatch.of([s]), a.p_w[None], a.q_nb[None], a.v_b[None])[0]
@@ -154,7 +155,8 @@ class LdvModel:
         cfg = self.cfg
         n = self.rng.standard_normal((len(sb), 3)) * cfg.noise_mps
         c_ns = Rotation.from_quat(sb.q_nb).inv()                           # C_n^s
-        r = c_ns.apply(p_a - sb.p_w)
+        c_lw = np.swapaxes(self.plane.c_local_to_world(sb.p_w), -1, -2)  # world -> local ENU
+        r = c_ns.apply(np.einsum('kij,kj->ki', c_lw, p_a - sb.p_w))
         d = r - np.asarray(cfg.origin_m)
         valid = ((d[:, 0] >= -cfg.beam_halfwidth_m) & (d[:, 0] <= cfg.track_length_m)
                  & (np.hypot(d[:, 1], d[:, 2]) <= cfg.beam_halfwidth_m))

@@ -1,5 +1,9 @@
 """Ship six-DOF truth at the master INS point.
 
+Two modes (`ShipConfig.mode`): 'paper' (below) and 'spectral' (`ship_waves.py`: a random
+sea through response amplitude operators on a straight course; see that module).
+`make_motion(cfg, seed)` builds either.
+
 Paper mode (seed 002, eq 18): one sinusoid per attitude axis plus heave, on a straight
 course at constant speed. Amplitudes are the paper's Table 3 (sea states 3-7); the paper
 gives no periods, so roll sits at the natural roll period and pitch, heave and yaw at the
@@ -12,6 +16,7 @@ acceleration by its exact derivative, and the nav-frame acceleration of the grou
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from typing import Literal
 
@@ -38,8 +43,20 @@ BALES_HS_M = {0: 0.0, 1: 0.05, 2: 0.3, 3: 0.88, 4: 1.88, 5: 3.25, 6: 5.0, 7: 7.5
 
 @dataclass(frozen=True)
 class ShipConfig:
-    """Ship scenario: course, speed, start position and the sea."""
-    mode: Literal['paper'] = 'paper'
+    """Ship scenario: course, speed, start position and the sea.
+
+    Spectral mode only (ignored by 'paper'): `hs_m` / `tp_s` override the sea state's
+    significant wave height and peak period (0 = Bales table value for `sea_state`);
+    `sea_draw` draws them at random within the sea state's bin instead (Monte Carlo);
+    `spectrum` ITTC (Bretschneider) or JONSWAP (`jonswap_gamma`); `spreading` 'none'
+    (long-crested) or 'cos2' over `n_directions`; `wave_heading_deg` is the direction the
+    waves travel relative to the bow, clockwise (180 = head seas, 90 = waves from port,
+    0 = following); `n_frequencies` log-spaced bins on `omega_min`..`omega_max` rad/s (0 = auto);
+    `rao_source` 'closed_form' (a 310 m carrier, `rao.CarrierParams`, with `roll_period_s` and
+    `roll_zeta` (0 = 0.05 at 0 kn to 0.10 at 30 kn)) or a path to an MSS vessel .mat file;
+    `course_keeping` 'straight' (constant course and speed; the only low-frequency model yet).
+    """
+    mode: Literal['paper', 'spectral'] = 'paper'
     sea_state: int = 4
     speed_kn: float = 10.0
     heading_deg: float = 30.0
@@ -47,6 +64,21 @@ class ShipConfig:
     lon_deg: float = 116.0
     heave: bool = True
     motion_scale: float = 1.0
+    hs_m: float = 0.0
+    tp_s: float = 0.0
+    sea_draw: bool = False
+    spectrum: Literal['ittc', 'jonswap'] = 'ittc'
+    jonswap_gamma: float = 3.3
+    spreading: Literal['none', 'cos2'] = 'cos2'
+    wave_heading_deg: float = 180.0
+    n_frequencies: int = 150
+    n_directions: int = 15
+    omega_min: float = 0.0
+    omega_max: float = 0.0
+    rao_source: str = 'closed_form'
+    roll_period_s: float = 20.0
+    roll_zeta: float = 0.0
+    course_keeping: Literal['straight'] = 'straight'
 
     def validate(self) -> None:
         require(0 <= self.sea_state <= 9, f"sea_state must be a WMO code 0-9, got {self.sea_state}")
@@ -58,6 +90,34 @@ class ShipConfig:
         require(-90.0 < self.lat_deg < 90.0, f"lat_deg must be in (-90, 90), got {self.lat_deg}")
         require(-180.0 <= self.lon_deg <= 360.0, f"lon_deg out of range: {self.lon_deg}")
         require(0.0 <= self.motion_scale <= 10.0, f"motion_scale must be in [0, 10], got {self.motion_scale}")
+        require(0.0 <= self.hs_m <= 30.0, f"hs_m must be in [0, 30] m (0 = from sea_state), got {self.hs_m}")
+        require(self.tp_s == 0.0 or 1.0 <= self.tp_s <= 30.0,
+                f"tp_s must be 0 (from sea_state) or in [1, 30] s, got {self.tp_s}")
+        require(1.0 <= self.jonswap_gamma <= 10.0, f"jonswap_gamma must be in [1, 10], got {self.jonswap_gamma}")
+        require(-360.0 <= self.wave_heading_deg <= 360.0,
+                f"wave_heading_deg must be in [-360, 360], got {self.wave_heading_deg}")
+        require(1 <= self.n_frequencies <= 2000, f"n_frequencies must be in [1, 2000], got {self.n_frequencies}")
+        require(1 <= self.n_directions <= 101, f"n_directions must be in [1, 101], got {self.n_directions}")
+        require(self.omega_min >= 0.0 and self.omega_max >= 0.0,
+                f"omega_min / omega_max must be >= 0 (0 = auto), got {self.omega_min}, {self.omega_max}")
+        require(self.omega_min == 0.0 or self.omega_max == 0.0 or self.omega_min < self.omega_max,
+                f"omega_min must be below omega_max, got {self.omega_min}, {self.omega_max}")
+        require(5.0 <= self.roll_period_s <= 60.0, f"roll_period_s must be in [5, 60], got {self.roll_period_s}")
+        require(0.0 <= self.roll_zeta < 1.0, f"roll_zeta must be in [0, 1) (0 = speed dependent), got {self.roll_zeta}")
+        if self.mode == 'spectral' and self.rao_source != 'closed_form':
+            path = os.path.expandvars(os.path.expanduser(self.rao_source))
+            require(os.path.isfile(path), f"rao_source: RAO file not found: {self.rao_source!r} "
+                                          f"(give 'closed_form' or the path of an MSS vessel .mat file)")
+
+
+def make_motion(cfg: ShipConfig, seed: int):
+    """The ship model for `cfg.mode`: PaperShipMotion or ship_waves.SpectralShipMotion."""
+    if cfg.mode == 'paper':
+        return PaperShipMotion(cfg, seed)
+    if cfg.mode == 'spectral':
+        from .ship_waves import SpectralShipMotion
+        return SpectralShipMotion(cfg, seed)
+    raise ConfigError(f"ship.mode {cfg.mode!r} is not available")
 
 
 class PaperShipMotion:

@@ -219,7 +219,7 @@ class TransferAlignment:
 
     def _initialise(self, t, m, c_m, r, v_ref) -> None:
         cfg = self.cfg
-        lat, lon, h = self.plane.to_geodetic(m.p_w + c_m @ r)
+        lat, lon, h = self.plane.to_geodetic(m.p_w + self.plane.c_local_to_world(m.p_w) @ (c_m @ r))
         q = Rotation.from_matrix(c_m).as_quat()
         self.ins = Strapdown(NavState(q_nb=q, v_n=v_ref.copy(), lat=float(lat), lon=float(lon),
                                       h=float(h)))

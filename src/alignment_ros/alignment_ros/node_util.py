@@ -11,6 +11,7 @@ from pathlib import Path
 
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.clock import Clock, ClockType
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 
@@ -39,6 +40,10 @@ class CountingNode(Node):
                 topic, _, n = item.rpartition(':')
                 self._need[topic] = int(n)
         self._held: dict[str, list] = {}
+        if self._need:
+            # held messages go out as soon as their subscribers match, even when nothing else
+            # is sent any more (a steady clock: simulation time may have stopped)
+            self.create_timer(0.05, self.flush_held, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     def stream_publisher(self, msg_type, topic: str):
         pub = self.create_publisher(msg_type, topic, qos.STREAM)
@@ -57,6 +62,16 @@ class CountingNode(Node):
                 self.published[topic] += 1
         self._pubs[topic].publish(msg)
         self.published[topic] += 1
+
+    def flush_held(self) -> None:
+        """Publish held messages of every topic whose subscribers have now matched."""
+        for topic in list(self._need):
+            if self._pubs.get(topic) is not None and \
+                    self._pubs[topic].get_subscription_count() >= self._need[topic]:
+                del self._need[topic]
+                for m in self._held.pop(topic, []):
+                    self._pubs[topic].publish(m)
+                    self.published[topic] += 1
 
     def held(self) -> dict[str, int]:
         """Messages still held back because their subscribers never matched."""
@@ -119,6 +134,10 @@ def run(node_factory, spin: bool = True) -> None:
     finally:
         if hasattr(node, 'finish'):
             node.finish()
+        deadline = time.monotonic() + 5.0
+        while node.held() and time.monotonic() < deadline:
+            node.flush_held()
+            executor.spin_once(timeout_sec=0.05)
         node.write_stats()
         node.destroy_node()
         rclpy.try_shutdown()

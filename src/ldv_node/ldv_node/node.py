@@ -4,6 +4,7 @@ from __future__ import annotations
 from geometry_msgs.msg import TwistWithCovarianceStamped
 from nav_msgs.msg import Odometry
 
+from alignment_core import pipeline
 from alignment_core.sensors import LdvModel
 from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import ScenarioParameters
@@ -14,7 +15,7 @@ class LdvNode(node_util.CountingNode):
     def __init__(self) -> None:
         super().__init__('ldv_node')
         self.sc = ScenarioParameters(self).scenario
-        self.model = LdvModel(self.sc.ldv, self.sc.seed)
+        self.model = LdvModel(self.sc.ldv, self.sc.seed, pipeline.plane_of(self.sc))
         self.stream_publisher(TwistWithCovarianceStamped, topics.LDV_TWIST)
         self.pairs = StampPairer()
         self.create_subscription(Odometry, topics.SHIP_ODOM, self.on_ship, qos.STREAM)
