@@ -13,8 +13,8 @@ from alignment_core.attitude import DEG
 from alignment_core.ship import ShipConfig
 from alignment_core.ship_waves import SpectralShipMotion
 
-S175 = Path('/work/shared/data/ship/s175.mat')
-needs_s175 = pytest.mark.skipif(not S175.exists(), reason='shared ship data not present')
+S175 = Path(__file__).resolve().parents[2] / 'data/ship/s175.mat'
+needs_s175 = pytest.mark.skipif(not S175.exists(), reason='data/ship/s175.mat missing from the checkout')
 
 
 @pytest.fixture(scope='module')
