@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -24,7 +25,7 @@ from scipy.spatial.transform import Rotation
 from . import earth
 from .attitude import ARCMIN, DEG, DPH, cross3, dcm_to_rotvec_small, rotvec_to_dcm_small
 from .config import require
-from .filters.kalman import KalmanFilter
+from .filters import CarlsonFilter, FadingMemoryFilter, KalmanFilter, SqrtFadingFilter, StrongTrackingFilter, UDFilter
 from .models import velocity_matching as vm
 from .samples import ImuSample, LdvSample, MasterSample
 from .sensors import UG
@@ -52,6 +53,14 @@ class FilterConfig:
     parked_velocity_sigma_mps: float = 0.005
     launch_detect_mps: float = 0.05
     master_attitude_states: bool = True
+    algorithm: Literal['kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud',
+                       'combined'] = 'kf'
+    float32: bool = False
+    stf_rho: float = 0.95
+    stf_beta: float = 3.0      # at 100 Hz V0 (about 20 samples) scatters +-30 % around R: beta < ~2.5 fades on noise
+    stf_alpha: tuple[float, float, float, float, float] = (1.0, 1.0, 1.0, 1.0, 1.0)
+    fading_factor: float = 1.0
+    fading_gamma: float = 10.0
     master_tilt_sigma_arcmin: float = 0.2
     master_heading_sigma_arcmin: float = 0.5
     output_rate_hz: float = 10.0
@@ -67,6 +76,11 @@ class FilterConfig:
                   'master_velocity_sigma_mps', 'gate_chi2'):
             require(getattr(self, k) >= 0.0, f"{k} must be >= 0, got {getattr(self, k)}")
         require(self.max_gap_factor > 1.0, f"max_gap_factor must be > 1, got {self.max_gap_factor}")
+        require(0.0 < self.stf_rho <= 1.0, f"stf_rho must be in (0, 1], got {self.stf_rho}")
+        require(self.stf_beta >= 1.0, f"stf_beta must be >= 1, got {self.stf_beta}")
+        require(all(a >= 1.0 for a in self.stf_alpha), f"stf_alpha must all be >= 1, got {self.stf_alpha}")
+        require(self.fading_factor >= 1.0, f"fading_factor must be >= 1, got {self.fading_factor}")
+        require(self.fading_gamma >= 1.0, f"fading_gamma must be >= 1, got {self.fading_gamma}")
 
 
 @dataclass
@@ -98,6 +112,33 @@ class Counters:
     gated: int = 0
     skipped_before_init: int = 0
     extra: dict = field(default_factory=dict)
+
+
+def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray):
+    """The filter named by cfg.algorithm (alignment_core.filters), in float32 if asked.
+
+    stf_alpha gives the multiple-factor STF's alpha per state block (phi, dV, eps, nabla,
+    phi_m): which blocks may change faster than the model says."""
+    dtype = np.float32 if cfg.float32 else np.float64
+    a = cfg.algorithm
+    if a == 'kf':
+        return KalmanFilter(x0, p0, dtype=dtype)
+    if a == 'stf':
+        return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, dtype=dtype)
+    if a == 'stf_multiple':
+        alpha = np.repeat(np.asarray(cfg.stf_alpha), 3)[:len(x0)]
+        return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, alpha=alpha, dtype=dtype)
+    if a == 'fading':
+        return FadingMemoryFilter(x0, p0, lam=cfg.fading_factor, dtype=dtype)
+    if a == 'fading_tested':
+        return FadingMemoryFilter(x0, p0, gamma=cfg.fading_gamma, dtype=dtype)
+    if a == 'carlson':
+        return CarlsonFilter(x0, p0, dtype=dtype)
+    if a == 'ud':
+        return UDFilter(x0, p0, dtype=dtype)
+    if a == 'combined':
+        return SqrtFadingFilter(x0, p0, gamma=cfg.fading_gamma, dtype=dtype)
+    raise ValueError(f'unknown filter algorithm {a!r}')
 
 
 def _finite(*arrays) -> bool:
@@ -230,7 +271,7 @@ class TransferAlignment:
             np.full(3, (cfg.accel_bias_sigma_ug * UG) ** 2),
             np.array([cfg.master_tilt_sigma_arcmin, cfg.master_tilt_sigma_arcmin,
                       cfg.master_heading_sigma_arcmin]) ** 2 * ARCMIN**2][:self.n // 3]))
-        self.kf = KalmanFilter(np.zeros(self.n), p0)
+        self.kf = make_filter(cfg, np.zeros(self.n), p0)
         self.t_ins = t
         self.t0 = t
 
