@@ -14,6 +14,17 @@ angular acceleration, velocity with acceleration). Catapult events fall on the s
 At a point P on the rigid ship: v_P = v + C(w x r + r'), a_P = a + C(w' x r + w x (w x r)
 + 2 w x r' + r''); omega_ib^a = C_s^a w + C_n^a (omega_ie + omega_en);
 f^a = C_n^a (a_P + (2 omega_ie + omega_en) x v_P - g).
+
+Optional effects (all off by default, leaving the default output bit-identical):
+- aircraft.vibration (vibration.py): nose-gear vibration from the launch, on the
+  accelerometers only or as real motion; its share of the increments is integrated in
+  closed form (the quadrature sees r, r' of the vibration but not its r'').
+- aircraft.flexure (deck_flexure.py): C_a^s(t) = exp([mu x]) exp([theta(t) x]), body rate
+  + J_r(theta) theta'; the aircraft truth attitude carries it (the true relative attitude),
+  while the reported misalignment stays the mounting mu. The catapult track stays the
+  mounted aircraft x axis C_a^s(mu) e_x (the deck rail does not follow the flexure).
+- output='sample' (imu.output): point values of omega_ib^a and f^a at the end of each interval
+  (times the interval, so the error model's increment / interval gives the point value).
 """
 from __future__ import annotations
 
@@ -25,7 +36,9 @@ from scipy.spatial.transform import Rotation
 from . import earth
 from .attitude import ARCMIN, G0, cross, quat_mul_batch, quat_to_dcm_batch, rotvec_to_dcm_batch
 from .config import require
+from .deck_flexure import FlexureConfig, FlexureProcess, right_jacobian
 from .samples import AircraftTruth, ShipBatch, ShipSample
+from .vibration import Vibration, VibrationConfig
 
 GL_NODES = np.array([0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6)])
 GL_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 18.0
@@ -52,6 +65,8 @@ class AircraftConfig:
     lever_arm_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
     misalignment_arcmin: tuple[float, float, float] = (15.0, -10.0, -30.0)
     catapult: CatapultConfig = field(default_factory=CatapultConfig)
+    vibration: VibrationConfig = field(default_factory=VibrationConfig)
+    flexure: FlexureConfig = field(default_factory=FlexureConfig)
 
     def validate(self) -> None:
         r = np.asarray(self.lever_arm_m)
@@ -72,8 +87,10 @@ def check_catapult_grid(cat: CatapultConfig, rate_hz: float) -> None:
 class AircraftKinematics:
     """Relative motion on the deck, release state and ideal IMU increments."""
 
-    def __init__(self, cfg: AircraftConfig, plane: earth.TangentPlane, rate_hz: float) -> None:
+    def __init__(self, cfg: AircraftConfig, plane: earth.TangentPlane, rate_hz: float,
+                 output: str = 'increment', seed: int = 0) -> None:
         self.cfg = cfg
+        self.output = output
         self.plane = plane
         self.r0 = np.asarray(cfg.lever_arm_m, dtype=float)
         self.mu = np.asarray(cfg.misalignment_arcmin, dtype=float) * ARCMIN
@@ -92,9 +109,24 @@ class AircraftKinematics:
         else:
             self.launch = self.release = np.inf
         self.release_state: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        vib = cfg.vibration
+        self.vib = Vibration(vib, self.launch) if (vib.enabled and cat.enabled) else None
+        self.vib_motion = self.vib is not None and vib.mode == 'motion'
+        self.flex = FlexureProcess(cfg.flexure, seed, rate_hz) if cfg.flexure.enabled else None
 
-    def relative(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """r, r', r'' (..., 3) in ship axes at times tau (...) (s since scenario start), on deck."""
+    def _flex_at(self, tau):
+        """(theta, theta') at the sample instants tau, or None without flexure."""
+        if self.flex is None:
+            return None
+        return self.flex.at(self.flex.index(tau))
+
+    def _c_sa(self, flex):
+        return self.c_sa if flex is None else self.c_sa @ rotvec_to_dcm_batch(flex[0])
+
+    def relative(self, tau: np.ndarray, vib_acc: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """r, r', r'' (..., 3) in ship axes at times tau (...) (s since scenario start), on deck.
+        With motion-mode vibration, its displacement and velocity are included, and its
+        acceleration unless vib_acc is False (the increments add that part exactly)."""
         tau = np.asarray(tau, dtype=float)
         if not self.enabled:
             z = np.zeros(tau.shape + (3,))
@@ -105,11 +137,18 @@ class AircraftKinematics:
         sd = self.acc * s_t
         sdd = self.acc * moving
         r = self.r0 + s[..., None] * self.track
-        return r, sd[..., None] * self.track, sdd[..., None] * self.track
+        if not self.vib_motion:
+            return r, sd[..., None] * self.track, sdd[..., None] * self.track
+        rd = sd[..., None] * self.track + self.vib.vel(tau) @ self.c_sa.T
+        rdd = sdd[..., None] * self.track
+        if vib_acc:
+            rdd = rdd + self.vib.acc(tau) @ self.c_sa.T
+        return r + self.vib.pos(tau) @ self.c_sa.T, rd, rdd
 
-    def _on_deck(self, c_nb, w, wd, v_n, a_n, p_w, tau):
-        """Aircraft nav quantities on the deck; leading dims (...) of tau, vectors (..., 3)."""
-        r, rd, rdd = self.relative(tau)
+    def _on_deck(self, c_nb, w, wd, v_n, a_n, p_w, tau, flex=None, vib_acc=True):
+        """Aircraft nav quantities on the deck; leading dims (...) of tau, vectors (..., 3);
+        flex = (theta, theta') (..., 3) of the deck flexure or None."""
+        r, rd, rdd = self.relative(tau, vib_acc)
         wxr = cross(w, r)
         v_p = v_n + np.einsum('...ij,...j->...i', c_nb, wxr + rd)
         a_rel = cross(wd, r) + cross(w, wxr) + 2.0 * cross(w, rd) + rdd
@@ -117,8 +156,14 @@ class AircraftKinematics:
         # C r is in the local-level frame at the ship; p_w in the world tangent plane
         p_p = p_w + np.einsum('...ij,...j->...i', self.plane.c_local_to_world(p_w),
                               np.einsum('...ij,...j->...i', c_nb, r))
-        c_na = c_nb @ self.c_sa                                          # C_a^n
-        w_na = w @ self.c_sa                                             # C_s^a w (row form)
+        if flex is None:
+            c_na = c_nb @ self.c_sa                                      # C_a^n
+            w_na = w @ self.c_sa                                         # C_s^a w (row form)
+        else:
+            c_sa = self._c_sa(flex)
+            c_na = c_nb @ c_sa
+            w_na = (np.einsum('...ji,...j->...i', c_sa, w)
+                    + np.einsum('...ij,...j->...i', right_jacobian(flex[0]), flex[1]))
         return c_na, w_na, v_p, a_p, p_p
 
     def _free(self, tau):
@@ -150,15 +195,24 @@ class AircraftKinematics:
         if np.any(on):
             v_n = np.einsum('kij,kj->ki', c_nb[on], sb.v_b[on])
             a_n = np.einsum('kij,kj->ki', c_nb[on], sb.a_b[on])
+            flex = self._flex_at(tau[on])
             c_na[on], w_na[on], v_p[on], _, p_p[on] = self._on_deck(
-                c_nb[on], sb.w_b[on], sb.wdot_b[on], v_n, a_n, sb.p_w[on], tau[on])
+                c_nb[on], sb.w_b[on], sb.wdot_b[on], v_n, a_n, sb.p_w[on], tau[on], flex)
+        if self.flex is None:
+            q_sa = self.q_sa
+        else:
+            q_sa = np.broadcast_to(self.q_sa, (len(tau), 4)).copy()
+            if np.any(on):
+                th = self.flex.at(self.flex.index(tau[on]))[0]
+                q_sa[on] = quat_mul_batch(self.q_sa, Rotation.from_rotvec(th).as_quat())
+        q = quat_mul_batch(sb.q_nb, q_sa)
+        if np.any(on):
             rel = np.flatnonzero(tau == self.release)
             if len(rel):
                 k = rel[0]
                 self.release_state = (c_na[k].copy(), v_p[k].copy(), p_p[k].copy())
-                self.release_quat = quat_mul_batch(sb.q_nb[k], self.q_sa)
+                self.release_quat = q[k].copy() if self.flex is not None else quat_mul_batch(sb.q_nb[k], self.q_sa)
                 self.release_v_world = self.plane.c_local_to_world(p_p[k]) @ v_p[k]
-        q = quat_mul_batch(sb.q_nb, self.q_sa)
         if np.any(~on):
             if self.release_state is None:
                 raise RuntimeError('free flight before the release state was seen')
@@ -175,9 +229,12 @@ class AircraftKinematics:
 
     def increments_batch(self, s0: ShipBatch, s1: ShipBatch, tau0: np.ndarray, tau1: np.ndarray
                          ) -> tuple[np.ndarray, np.ndarray]:
-        """Ideal (delta_theta, delta_v), each (K, 3), over (tau0, tau1] for K intervals."""
+        """Ideal (delta_theta, delta_v), each (K, 3), over (tau0, tau1] for K intervals
+        (output 'sample': the point values at tau1 times the interval)."""
         tau0 = np.asarray(tau0, dtype=float)
         h = np.asarray(tau1, dtype=float) - tau0                         # (K,)
+        if self.output == 'sample':
+            return self._points(s1, tau0, np.asarray(tau1, dtype=float), h)
         u = GL_NODES                                                     # (J,)
         tau = tau0[:, None] + u[None, :] * h[:, None]                    # (K, J)
         w_ib = np.empty(tau.shape + (3,))
@@ -214,9 +271,52 @@ class AircraftKinematics:
             v_n = herm(v0, a0, v1, a1, h00, h10, h01, h11)
             a_n = herm(v0, a0, v1, a1, d00, d10, d01, d11) / hk
             p_w = (1.0 - uu) * a.p_w[:, None] + uu * b.p_w[:, None]
-            w_ib[deck], f[deck] = self._imu(*self._on_deck(c_nb, w, wd, v_n, a_n, p_w, tau[deck]))
-        return (h[:, None] * np.einsum('kjc,j->kc', w_ib, GL_WEIGHTS),
-                h[:, None] * np.einsum('kjc,j->kc', f, GL_WEIGHTS))
+            flex = None
+            if self.flex is not None:
+                (t0, d0), (t1, d1) = self._flex_at(tau0[deck]), self._flex_at(tau0[deck] + h[deck])
+                flex = (herm(t0, d0, t1, d1, h00, h10, h01, h11),
+                        herm(t0, d0, t1, d1, d00, d10, d01, d11) / hk)
+            w_ib[deck], f[deck] = self._imu(*self._on_deck(c_nb, w, wd, v_n, a_n, p_w, tau[deck],
+                                                           flex, vib_acc=not self.vib_motion))
+        dth = h[:, None] * np.einsum('kjc,j->kc', w_ib, GL_WEIGHTS)
+        dv = h[:, None] * np.einsum('kjc,j->kc', f, GL_WEIGHTS)
+        if self.vib is not None:
+            dv = dv + self._vib_dv(tau0, tau0 + h, deck)
+        return dth, dv
+
+    def _vib_dv(self, tau0, tau1, deck):
+        """Exact vibration share of delta_v (K, 3), aircraft axes. Motion mode: only on the
+        deck, rotated by C_s^a(t) C_a^s(mu) = exp(-theta) at mid-interval under flexure."""
+        dv = self.vib.dv(tau0, tau1)
+        if not self.vib_motion:
+            return dv
+        dv = np.where(deck[:, None], dv, 0.0)
+        if self.flex is not None and np.any(deck):
+            (t0, _), (t1, _) = self._flex_at(tau0[deck]), self._flex_at(tau1[deck])
+            c = rotvec_to_dcm_batch(0.5 * (t0 + t1))
+            dv[deck] = np.einsum('kji,kj->ki', c, dv[deck])
+        return dv
+
+    def _points(self, s1: ShipBatch, tau0, tau1, h):
+        """Point values of omega_ib^a and f^a at tau1 (K, 3), times h."""
+        w_ib = np.empty((len(h), 3))
+        f = np.empty((len(h), 3))
+        free = tau0 >= self.release
+        if np.any(free):
+            if self.release_state is None:
+                raise RuntimeError('free flight before the release state was seen')
+            w_ib[free], f[free] = self._imu(*self._free(tau1[free]))
+        deck = ~free
+        if np.any(deck):
+            b = s1.slice(deck) if not np.all(deck) else s1
+            c1 = quat_to_dcm_batch(b.q_nb)
+            v_n = np.einsum('kij,kj->ki', c1, b.v_b)
+            a_n = np.einsum('kij,kj->ki', c1, b.a_b)
+            w_ib[deck], f[deck] = self._imu(*self._on_deck(
+                c1, b.w_b, b.wdot_b, v_n, a_n, b.p_w, tau1[deck], self._flex_at(tau1[deck])))
+        if self.vib is not None and not self.vib_motion:
+            f = f + self.vib.acc(tau1)
+        return w_ib * h[:, None], f * h[:, None]
 
     def increments(self, s0: ShipSample, s1: ShipSample, tau0: float, tau1: float
                    ) -> tuple[np.ndarray, np.ndarray]:

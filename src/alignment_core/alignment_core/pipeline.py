@@ -26,7 +26,7 @@ class SlaveImuStage:
 
     def __init__(self, sc: Scenario) -> None:
         self.t0 = sc.t0_ns
-        self.kin = AircraftKinematics(sc.aircraft, plane_of(sc), sc.rate_hz)
+        self.kin = AircraftKinematics(sc.aircraft, plane_of(sc), sc.rate_hz, sc.imu.output, sc.seed)
         self.errors = ImuErrorModel(sc.imu, sc.seed)
         self.prev: ShipSample | None = None
 

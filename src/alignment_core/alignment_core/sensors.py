@@ -2,7 +2,11 @@
 
 Slave IMU: random-constant gyro and accelerometer biases (1-sigma per axis, drawn once from
 the seed), angle and velocity random walk added to the integrated increments, output as
-mean rate and mean specific force over each interval (increment / interval).
+mean rate and mean specific force over each interval (increment / interval). Optional (off by
+default, own RNG streams so the default numbers do not change): first-order Gauss-Markov bias
+instability (bias over each interval = the state at its start), scale factor and
+non-orthogonality applied to the ideal increments; imu.output = 'sample' makes the ideal part a
+point value (aircraft.py).
 
 Master INS: a ship INS in steady state (damped by log/GNSS for hours) has its tilt balancing
 its accelerometer bias and its heading at the gyrocompass equilibrium, so its velocity error
@@ -16,12 +20,13 @@ LDV: aircraft velocity relative to the deck in ship axes plus white noise; no me
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import DPH, G0, cross
+from .attitude import ARCSEC, DPH, G0, cross
 from .config import require
 from .rng import stage_rng
 from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipBatch, ShipSample
@@ -36,11 +41,29 @@ class ImuConfig:
     accel_bias_ug: float = 100.0
     arw_dpsh: float = 0.001           # angle random walk, deg/sqrt(h)
     vrw_ugpshz: float = 10.0          # velocity random walk, ug/sqrt(Hz)
+    # 'increment': mean rate / specific force over each interval (integrated increments);
+    # 'sample': their point values at the sample instant (aliasing visible; seed 000's model)
+    output: Literal['increment', 'sample'] = 'increment'
+    # bias instability: first-order Gauss-Markov per axis (1-sigma, correlation time), on top
+    # of the random constants; stream stage_rng(seed, 'slave_imu_gm'). 0 = off.
+    gyro_bias_instability_dph: float = 0.0
+    accel_bias_instability_ug: float = 0.0
+    bias_corr_time_s: float = 100.0
+    # scale factor (ppm) and non-orthogonality (arcsec, each off-diagonal element), 1-sigma,
+    # drawn once from stage_rng(seed, 'slave_imu_scale'); output = (I + S) ideal. 0 = off.
+    gyro_scale_ppm: float = 0.0
+    accel_scale_ppm: float = 0.0
+    gyro_nonorth_arcsec: float = 0.0
+    accel_nonorth_arcsec: float = 0.0
 
     def validate(self) -> None:
-        for k in ('gyro_bias_dph', 'accel_bias_ug', 'arw_dpsh', 'vrw_ugpshz'):
+        for k in ('gyro_bias_dph', 'accel_bias_ug', 'arw_dpsh', 'vrw_ugpshz',
+                  'gyro_bias_instability_dph', 'accel_bias_instability_ug', 'gyro_scale_ppm',
+                  'accel_scale_ppm', 'gyro_nonorth_arcsec', 'accel_nonorth_arcsec'):
             v = getattr(self, k)
             require(0.0 <= v <= 1e6, f"{k} must be >= 0, got {v}")
+        require(0.0 < self.bias_corr_time_s <= 1e6,
+                f"bias_corr_time_s must be in (0, 1e6], got {self.bias_corr_time_s}")
 
     @property
     def arw(self) -> float:
@@ -61,6 +84,37 @@ class ImuErrorModel:
         self.rng = stage_rng(seed, 'slave_imu')
         self.gyro_bias = self.rng.standard_normal(3) * cfg.gyro_bias_dph * DPH
         self.accel_bias = self.rng.standard_normal(3) * cfg.accel_bias_ug * UG
+        self.scale = None
+        if cfg.gyro_scale_ppm or cfg.accel_scale_ppm or cfg.gyro_nonorth_arcsec or cfg.accel_nonorth_arcsec:
+            r = stage_rng(seed, 'slave_imu_scale')
+            off = ~np.eye(3, dtype=bool)
+            m = np.zeros((2, 3, 3))
+            for i, (sf, no) in enumerate(((cfg.gyro_scale_ppm, cfg.gyro_nonorth_arcsec),
+                                          (cfg.accel_scale_ppm, cfg.accel_nonorth_arcsec))):
+                d = r.standard_normal(3) * sf * 1e-6
+                o = r.standard_normal(6) * no * ARCSEC
+                m[i][np.diag_indices(3)] = 1.0 + d
+                m[i][off] = o
+            self.scale = m                                                 # (I + S) gyro, accel
+        self.gm_sigma = np.r_[np.full(3, cfg.gyro_bias_instability_dph * DPH),
+                              np.full(3, cfg.accel_bias_instability_ug * UG)]
+        self.gm = None
+        if np.any(self.gm_sigma > 0.0):
+            self.gm_rng = stage_rng(seed, 'slave_imu_gm')
+            self.gm = self.gm_rng.standard_normal(6) * self.gm_sigma       # stationary start
+
+    def _gm_batch(self, h: np.ndarray) -> np.ndarray:
+        """Bias-instability state over each interval (K, 6); advanced sample by sample."""
+        n = self.gm_rng.standard_normal((len(h), 6))
+        phi = np.exp(-h / self.cfg.bias_corr_time_s)
+        q = np.sqrt(1.0 - phi**2)
+        out = np.empty((len(h), 6))
+        b = self.gm
+        for k in range(len(h)):
+            out[k] = b
+            b = phi[k] * b + q[k] * self.gm_sigma * n[k]
+        self.gm = b
+        return out
 
     def measure(self, t_ns: int, dtheta: np.ndarray, dv: np.ndarray, h: float) -> ImuSample:
         g, a = self.measure_batch(dtheta[None], dv[None], np.array([h]))
@@ -73,8 +127,15 @@ class ImuErrorModel:
         n = self.rng.standard_normal((len(h), 6))
         hh = h[:, None]
         sh = np.sqrt(hh)
+        if self.scale is not None:
+            dtheta = dtheta @ self.scale[0].T
+            dv = dv @ self.scale[1].T
         dth = dtheta + self.gyro_bias * hh + n[:, :3] * self.cfg.arw * sh
         dvv = dv + self.accel_bias * hh + n[:, 3:] * self.cfg.vrw * sh
+        if self.gm is not None:
+            b = self._gm_batch(h)
+            dth = dth + b[:, :3] * hh
+            dvv = dvv + b[:, 3:] * hh
         return dth / hh, dvv / hh
 
 
