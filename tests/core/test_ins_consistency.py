@@ -12,9 +12,9 @@ from scipy.spatial.transform import Rotation
 
 from alignment_core import pipeline, scenario
 from alignment_core.attitude import ARCMIN, G0
+from alignment_core.consistency import strapdown_errors
 from alignment_core.samples import AircraftTruth, ShipBatch
 from alignment_core.sensors import LdvConfig, LdvModel
-from alignment_core.strapdown import NavState, Strapdown
 
 NOISE_OFF = {'imu.gyro_bias_dph': 0.0, 'imu.accel_bias_ug': 0.0, 'imu.arw_dpsh': 0.0,
              'imu.vrw_ugpshz': 0.0}
@@ -33,26 +33,7 @@ def simulate(sc):
 
 def integrate(sc, truth, imu):
     """Strapdown from the true initial state; attitude and velocity errors after each sample."""
-    c_true = Rotation.from_quat(truth['q_nb']).as_matrix()
-    v_true = np.einsum('kij,kj->ki', c_true, truth['v_b'])
-    bad = ~(np.isfinite(v_true).all(axis=1) & np.isfinite(truth['p_w']).all(axis=1))
-    assert not bad.any(), f'aircraft truth is not finite at {bad.sum()} of {len(bad)} samples'
-    lat, lon, h = pipeline.plane_of(sc).to_geodetic(truth['p_w'][0])
-    sd = Strapdown(NavState(q_nb=truth['q_nb'][0].copy(), v_n=v_true[0].copy(), lat=float(lat),
-                            lon=float(lon), h=float(h)))
-    t_prev = sc.t0_ns
-    q = np.empty((len(imu), 4))
-    v = np.empty((len(imu), 3))
-    for k, s in enumerate(imu):
-        dt = (s.t_ns - t_prev) * 1e-9
-        t_prev = s.t_ns
-        # the sample is the mean rate / specific force over its interval: increment = value * dt
-        sd.update(s.gyro * dt, s.accel * dt, dt)
-        q[k] = sd.s.q_nb
-        v[k] = sd.s.v_n
-    att = np.linalg.norm((Rotation.from_matrix(c_true[1:]).inv() * Rotation.from_quat(q)).as_rotvec(),
-                         axis=-1)
-    return att, np.linalg.norm(v - v_true[1:], axis=-1)
+    return strapdown_errors(pipeline.plane_of(sc), sc.t0_ns, truth, imu)
 
 
 @pytest.mark.parametrize('name,overrides', [

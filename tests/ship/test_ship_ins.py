@@ -9,11 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
-from alignment_core import pipeline, scenario
+from alignment_core import consistency, pipeline, scenario
 from alignment_core.samples import ShipBatch
-from alignment_core.strapdown import NavState, Strapdown
 
 NOISE_OFF = {'imu.gyro_bias_dph': 0.0, 'imu.accel_bias_ug': 0.0, 'imu.arw_dpsh': 0.0,
              'imu.vrw_ugpshz': 0.0}
@@ -27,23 +25,8 @@ def strapdown_errors(sc) -> tuple[np.ndarray, np.ndarray, dict]:
     """Attitude (rad) and velocity (m/s) error norms after each IMU sample."""
     ships = ShipBatch.of(pipeline.ship_samples(sc))
     truth, imu = pipeline.SlaveImuStage(sc).run_batch(ships)
-    c_true = Rotation.from_quat(truth['q_nb']).as_matrix()
-    v_true = np.einsum('kij,kj->ki', c_true, truth['v_b'])
-    lat, lon, h = pipeline.plane_of(sc).to_geodetic(truth['p_w'][0])
-    sd = Strapdown(NavState(q_nb=truth['q_nb'][0].copy(), v_n=v_true[0].copy(), lat=float(lat),
-                            lon=float(lon), h=float(h)))
-    t_prev = sc.t0_ns
-    q = np.empty((len(imu), 4))
-    v = np.empty((len(imu), 3))
-    for k, s in enumerate(imu):
-        dt = (s.t_ns - t_prev) * 1e-9
-        t_prev = s.t_ns
-        sd.update(s.gyro * dt, s.accel * dt, dt)
-        q[k] = sd.s.q_nb
-        v[k] = sd.s.v_n
-    att = np.linalg.norm((Rotation.from_matrix(c_true[1:]).inv() * Rotation.from_quat(q)).as_rotvec(),
-                         axis=-1)
-    return att, np.linalg.norm(v - v_true[1:], axis=-1), truth
+    att, vel = consistency.strapdown_errors(pipeline.plane_of(sc), sc.t0_ns, truth, imu)
+    return att, vel, truth
 
 
 @pytest.mark.parametrize('lever_arm', [[90.0, -40.0, 15.0], [0.0, 0.0, 0.0]],
