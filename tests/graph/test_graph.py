@@ -48,10 +48,10 @@ def replay_run(graph_run, tmp_path_factory) -> Path:
     return out
 
 
-def _bag_estimates(bag: Path) -> tuple[np.ndarray, np.ndarray]:
+def _bag_estimates(bag: Path, sigma: bool = False):
     from alignment_ros.summary import estimates_from_bag
     e = estimates_from_bag(bag)
-    return e['t_ns'], e['misalignment']
+    return (e['t_ns'], e['misalignment'], e['sigma']) if sigma else (e['t_ns'], e['misalignment'])
 
 
 def test_summary_has_contract_keys_and_no_losses(graph_run):
@@ -110,9 +110,11 @@ def test_graph_equals_batch(graph_run):
     batch = pipeline.run(sc, keep_truth=False)
     t_b = np.array([e.t_ns for e in batch.estimates])
     mu_b = np.array([e.misalignment for e in batch.estimates])
-    t_g, mu_g = _bag_estimates(graph_run / 'bag')
+    t_g, mu_g, sig_g = _bag_estimates(graph_run / 'bag', sigma=True)
     assert np.array_equal(t_g, t_b)
     assert np.max(np.abs(mu_g - mu_b)) < 1e-9
+    sig_b = np.array([e.misalignment_sigma for e in batch.estimates])
+    np.testing.assert_allclose(sig_g, sig_b, rtol=1e-9)
     s = json.loads((graph_run / 'summary.json').read_text())
     i = int(np.searchsorted(t_b, round(s['scored_at_s'] * 1e9), side='right')) - 1
     assert np.max(np.abs(np.array(s['misalignment_estimate_rad']) - mu_b[i])) < 1e-9

@@ -12,7 +12,6 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
 from alignment_core import pipeline
-from alignment_core.models.velocity_matching import LABELS
 from alignment_core.transfer_alignment import TransferAlignment
 from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import ScenarioParameters
@@ -56,7 +55,7 @@ class AlignmentFilterNode(node_util.CountingNode):
         for e in estimates:
             lat, lon, h = self.engine.ins.s.lat, self.engine.ins.s.lon, self.engine.ins.s.h
             p_w = self.plane.from_geodetic(lat, lon, h)
-            mis, att, st = convert.estimate_to_msgs(e, LABELS, p_w)
+            mis, att, st = convert.estimate_to_msgs(e, self.engine.labels, p_w)
             self.send(topics.ALIGN_MISALIGNMENT, mis)
             self.send(topics.ALIGN_ATTITUDE, att)
             self.send(topics.ALIGN_STATE, st)

@@ -172,6 +172,8 @@ def estimate_to_msgs(e: Estimate, labels: tuple[str, ...], p_w
     cov[3:, 3:] = e.attitude_cov
     cov[0, 0] = cov[1, 1] = cov[2, 2] = -1.0      # position is not estimated
     att.pose.covariance = [float(x) for x in cov.ravel()]
+    if len(e.x) != len(labels):
+        raise ValueError(f'{len(e.x)} states but {len(labels)} labels')
     st = Float64MultiArray()
     st.layout.dim = [MultiArrayDimension(label='t_s|value|sigma|mu_sigma', size=4, stride=4 * len(labels)),
                      MultiArrayDimension(label=','.join(labels), size=len(labels), stride=len(labels))]
