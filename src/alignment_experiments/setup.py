@@ -1,0 +1,24 @@
+from setuptools import find_packages, setup
+
+package_name = 'alignment_experiments'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='Transfer alignment testbed',
+    maintainer_email='dev@transfer-alignment.invalid',
+    description='Monte Carlo engine, experiment catalogue and reports for the transfer-alignment testbed.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'experiment = alignment_experiments.cli:main',
+        ],
+    },
+)
