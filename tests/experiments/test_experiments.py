@@ -64,8 +64,8 @@ def test_seed000_physics_in_the_report(tmp_path):
     exp = CATALOGUE.get('seed000_table1').quick(seeds=2)
     outcomes = monte_carlo.run_many(exp.specs(), workers=2, progress=False)
     by = results.cells_of(outcomes)
-    inc = [o for c, runs in by.items() for o in runs if 'increment' in c and 'filter=kf' in c]
-    smp = [o for c, runs in by.items() for o in runs if 'sample' in c and 'filter=kf' in c]
+    inc = [o for c, runs in by.items() for o in runs if 'increment' in c and 'filter=kf' in c and 'mps2=5 ' in c]
+    smp = [o for c, runs in by.items() for o in runs if 'sample' in c and 'filter=kf' in c and 'mps2=5 ' in c]
     assert inc and smp
     rms_inc = np.sqrt(np.mean([o.err ** 2 for o in inc], axis=0))
     rms_smp = np.sqrt(np.mean([o.err ** 2 for o in smp], axis=0))

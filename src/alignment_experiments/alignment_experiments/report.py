@@ -176,7 +176,7 @@ def write_report(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: 
                 cols = []
                 for i in range(3):
                     p = ref.arcmin[i]
-                    cols.append('–' if p is None else f'{p:.2f} / {rms[i]:.3f} / {abs(p) / rms[i]:.0f}×')
+                    cols.append('–' if p is None else f'{p:.2f} / {rms[i]:.3f} / {abs(p) / rms[i]:.3g}×')
                 rows.append([label] + cols)
         md.append(_table(['cell'] + [f'{a}: paper / ours / ratio' for a in AXES], rows))
     md += ['', '## Plots', ''] + [f'![{f}]({f})' for f in files]
