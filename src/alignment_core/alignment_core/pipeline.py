@@ -12,7 +12,7 @@ from .aircraft import AircraftKinematics
 from .attitude import ARCMIN, DEG
 from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipBatch, ShipSample
 from .scenario import Scenario, tau_of
-from .sensors import ImuErrorModel, LdvModel, MasterInsModel
+from .sensors import DopplerSample, DopplerStage, ImuErrorModel, LdvStage, MasterInsStage
 from .ship import PaperShipMotion, make_motion
 from .transfer_alignment import Estimate, TransferAlignment
 
@@ -77,32 +77,55 @@ def ship_samples(sc: Scenario) -> list[ShipSample]:
 
 @dataclass
 class Inputs:
-    """Everything the filter and the evaluation see, for a whole scenario."""
+    """Everything the filter and the evaluation see, for a whole scenario. Sensor streams
+    hold what their nodes publish (own rate, stamps = validity time + latency). `doppler` is
+    None unless doppler.enabled. `sensor_truth` (what /truth/imu_bias and
+    /truth/master_error carry, at every sample): imu_t_ns (K-1,), imu_gyro_bias,
+    imu_accel_bias (K-1, 3) in aircraft axes; master_t_ns (stamps of `master`),
+    master_phi, master_dv (nav frame)."""
     ships: ShipBatch
     truth: dict[str, np.ndarray]
     imu: list[ImuSample]
     master: list[MasterSample]
     ldv: list[LdvSample]
+    doppler: list[DopplerSample] | None = None
+    sensor_truth: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def simulate(sc: Scenario) -> Inputs:
     """Ship, slave IMU, master INS and LDV for the whole run, vectorised (the same numbers
     the nodes produce sample by sample)."""
     ships = ShipBatch.of(ship_samples(sc))
-    truth, imu = SlaveImuStage(sc).run_batch(ships)
-    master = MasterInsModel(sc.master, sc.seed, sc.ship.lat_deg * DEG).measure_batch(ships)
-    ldv = LdvModel(sc.ldv, sc.seed, plane_of(sc)).measure_batch(ships, truth['p_w'], truth['q_nb'], truth['v_b'])
-    return Inputs(ships, truth, imu, master, ldv)
+    slave = SlaveImuStage(sc)
+    truth, imu = slave.run_batch(ships)
+    masters = MasterInsStage(sc.master, sc.seed, sc.ship.lat_deg * DEG, sc.rate_hz, sc.t0_ns).run_batch(ships)
+    ldv = LdvStage(sc.ldv, sc.seed, plane_of(sc), sc.rate_hz, sc.t0_ns).run_batch(
+        ships, truth['p_w'], truth['q_nb'], truth['v_b'])
+    doppler = None
+    if sc.doppler.enabled:
+        doppler = DopplerStage(sc.doppler, sc.seed, sc.rate_hz, sc.t0_ns).run_batch(ships.t_ns, truth['v_b'])
+    bias = slave.errors.last_bias
+    sensor_truth = {'imu_t_ns': ships.t_ns[1:].copy(), 'imu_gyro_bias': bias[:, :3], 'imu_accel_bias': bias[:, 3:],
+                    'master_t_ns': np.array([o.t_ns for o in masters], dtype=np.int64),
+                    'master_phi': np.array([o.phi for o in masters]).reshape(-1, 3),
+                    'master_dv': np.array([o.dv for o in masters]).reshape(-1, 3)}
+    return Inputs(ships, truth, imu, [o.sample for o in masters], ldv, doppler, sensor_truth)
 
 
 def align(sc: Scenario, inp: Inputs) -> TransferAlignment:
     """Feed the inputs to a fresh filter in the order the graph's nodes publish them."""
     filt = TransferAlignment(sc.filter, plane_of(sc), sc.rate_hz)
+    j_ldv = j_master = 0        # sensor streams with their own rate / latency: pushed by stamp
     for k in range(len(inp.ships)):
+        t = int(inp.ships.t_ns[k])
         if k > 0:
             filt.push_imu(inp.imu[k - 1])
-        filt.push_ldv(inp.ldv[k])
-        filt.push_master(inp.master[k])
+        while j_ldv < len(inp.ldv) and inp.ldv[j_ldv].t_ns <= t:
+            filt.push_ldv(inp.ldv[j_ldv])
+            j_ldv += 1
+        while j_master < len(inp.master) and inp.master[j_master].t_ns <= t:
+            filt.push_master(inp.master[j_master])
+            j_master += 1
         filt.process()
     filt.process(final=True)
     return filt

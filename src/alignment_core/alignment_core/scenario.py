@@ -10,9 +10,11 @@ from pathlib import Path
 
 import yaml
 
+from . import sensor_presets
 from .aircraft import AircraftConfig, check_catapult_grid
 from .config import ConfigError, build, require, to_dict
-from .sensors import ImuConfig, LdvConfig, MasterConfig
+from .sensor_timing import check_rate
+from .sensors import DopplerConfig, ImuConfig, LdvConfig, MasterConfig
 from .ship import ShipConfig
 from .transfer_alignment import FilterConfig
 
@@ -31,6 +33,7 @@ class Scenario:
     aircraft: AircraftConfig = field(default_factory=AircraftConfig)
     imu: ImuConfig = field(default_factory=ImuConfig)
     ldv: LdvConfig = field(default_factory=LdvConfig)
+    doppler: DopplerConfig = field(default_factory=DopplerConfig)
     filter: FilterConfig = field(default_factory=FilterConfig)
 
     def validate(self) -> None:
@@ -45,6 +48,10 @@ class Scenario:
                 "duration_s must be a whole number of samples")
         if self.aircraft.catapult.enabled:
             check_catapult_grid(self.aircraft.catapult, self.rate_hz)
+        check_rate('master.rate_hz', self.master.rate_hz, self.rate_hz)
+        check_rate('ldv.rate_hz', self.ldv.rate_hz, self.rate_hz)
+        if self.doppler.enabled:
+            check_rate('doppler.rate_hz', self.doppler.rate_hz, self.rate_hz)
 
     @property
     def dt_ns(self) -> int:
@@ -109,6 +116,7 @@ def from_dict(data: dict, overrides: dict[str, object] | None = None) -> Scenari
     data = copy.deepcopy(data) if data else {}
     for k, v in (overrides or {}).items():
         _set_dotted(data, k, v)
+    sensor_presets.apply(data)           # imu.preset / master.preset fill the keys not given
     # the filter and the LDV know the surveyed deck spot unless told otherwise; the LDV
     # beam covers the catapult track (stroke length + 0.5 m), so matching ends at the release
     ac = data.get('aircraft') or {}

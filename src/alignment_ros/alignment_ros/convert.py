@@ -16,6 +16,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu, NavSatFix, NavSatStatus
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
+from alignment_core.doppler_radar import DopplerSample
 from alignment_core.samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
 from alignment_core.transfer_alignment import Estimate
 
@@ -136,6 +137,52 @@ def msg_to_ldv(m: TwistWithCovarianceStamped) -> LdvSample:
     valid = c0 >= 0.0
     return LdvSample(t_ns=to_ns(m.header.stamp), v_s=_a3(m.twist.twist.linear),
                      sigma=math.sqrt(c0) if valid else math.nan, valid=bool(valid))
+
+
+def doppler_to_msg(s: DopplerSample) -> TwistWithCovarianceStamped:
+    """/doppler/twist: ground velocity in aircraft body axes; covariance[0] = -1: no measurement."""
+    m = TwistWithCovarianceStamped()
+    m.header.stamp = stamp(s.t_ns)
+    m.header.frame_id = topics.FRAME_AIRCRAFT
+    if s.valid:
+        _v3(m.twist.twist.linear, s.v_b)
+        for i in (0, 7, 14):
+            m.twist.covariance[i] = s.sigma**2
+        m.twist.covariance[21] = -1.0             # angular part not measured
+    else:
+        m.twist.covariance[0] = -1.0
+    return m
+
+
+def msg_to_doppler(m: TwistWithCovarianceStamped) -> DopplerSample:
+    c0 = m.twist.covariance[0]
+    valid = c0 >= 0.0
+    return DopplerSample(t_ns=to_ns(m.header.stamp), v_b=_a3(m.twist.twist.linear),
+                         sigma=math.sqrt(c0) if valid else math.nan, valid=bool(valid))
+
+
+def imu_bias_to_msg(t_ns: int, gyro_bias, accel_bias) -> Imu:
+    """/truth/imu_bias: the slave IMU's additive gyro (rad/s) and accelerometer (m/s^2) bias
+    over the interval ending at t_ns, aircraft axes, in an Imu message (no orientation)."""
+    m = Imu()
+    m.header.stamp = stamp(t_ns)
+    m.header.frame_id = topics.FRAME_AIRCRAFT
+    m.orientation_covariance[0] = -1.0
+    _v3(m.angular_velocity, gyro_bias)
+    _v3(m.linear_acceleration, accel_bias)
+    return m
+
+
+def msg_to_imu_bias(m: Imu) -> tuple[int, np.ndarray, np.ndarray]:
+    return to_ns(m.header.stamp), _a3(m.angular_velocity), _a3(m.linear_acceleration)
+
+
+def vector_stamped(t_ns: int, frame: str, v) -> Vector3Stamped:
+    m = Vector3Stamped()
+    m.header.stamp = stamp(t_ns)
+    m.header.frame_id = frame
+    _v3(m.vector, v)
+    return m
 
 
 def truth_to_msgs(a: AircraftTruth) -> tuple[Odometry, Vector3Stamped | None]:

@@ -27,9 +27,10 @@ from .params import flat_scenario
 # matched subscriptions (recorder included) each node waits for before it sends on a topic
 MATCHED = {
     'ship_motion_node': {topics.CLOCK: 1, topics.SHIP_ODOM: 4, topics.SHIP_ACCEL: 2, topics.SHIP_FIX: 1},
-    'master_ins_node': {topics.MASTER_ODOM: 2, topics.MASTER_FIX: 1},
-    'slave_ins_node': {topics.AIRCRAFT_IMU: 2, topics.TRUTH_AIRCRAFT_ODOM: 2, topics.TRUTH_MISALIGNMENT: 1},
-    'ldv_node': {topics.LDV_TWIST: 2},
+    'master_ins_node': {topics.MASTER_ODOM: 2, topics.MASTER_FIX: 1, topics.TRUTH_MASTER_ERROR: 1},
+    'slave_ins_node': {topics.AIRCRAFT_IMU: 2, topics.TRUTH_AIRCRAFT_ODOM: 2, topics.TRUTH_MISALIGNMENT: 1,
+                       topics.TRUTH_IMU_BIAS: 1},
+    'ldv_node': {topics.LDV_TWIST: 2, topics.DOPPLER_TWIST: 1},
     'alignment_filter_node': {t: 1 for t in topics.FILTER_OUTPUT_TOPICS},
 }
 NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node')

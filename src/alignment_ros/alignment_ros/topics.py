@@ -9,8 +9,11 @@ MASTER_ODOM = '/master/odom'
 MASTER_FIX = '/master/fix'
 AIRCRAFT_IMU = '/aircraft/imu'
 LDV_TWIST = '/ldv/twist'
+DOPPLER_TWIST = '/doppler/twist'
 TRUTH_AIRCRAFT_ODOM = '/truth/aircraft/odom'
 TRUTH_MISALIGNMENT = '/truth/misalignment'
+TRUTH_IMU_BIAS = '/truth/imu_bias'
+TRUTH_MASTER_ERROR = '/truth/master_error'
 ALIGN_MISALIGNMENT = '/alignment/misalignment'
 ALIGN_ATTITUDE = '/alignment/attitude'
 ALIGN_STATE = '/alignment/state'
@@ -26,8 +29,11 @@ TOPIC_TYPES: dict[str, str] = {
     MASTER_FIX: 'sensor_msgs/msg/NavSatFix',
     AIRCRAFT_IMU: 'sensor_msgs/msg/Imu',
     LDV_TWIST: 'geometry_msgs/msg/TwistWithCovarianceStamped',
+    DOPPLER_TWIST: 'geometry_msgs/msg/TwistWithCovarianceStamped',
     TRUTH_AIRCRAFT_ODOM: 'nav_msgs/msg/Odometry',
     TRUTH_MISALIGNMENT: 'geometry_msgs/msg/Vector3Stamped',
+    TRUTH_IMU_BIAS: 'sensor_msgs/msg/Imu',
+    TRUTH_MASTER_ERROR: 'geometry_msgs/msg/Vector3Stamped',
     ALIGN_MISALIGNMENT: 'geometry_msgs/msg/Vector3Stamped',
     ALIGN_ATTITUDE: 'geometry_msgs/msg/PoseWithCovarianceStamped',
     ALIGN_STATE: 'std_msgs/msg/Float64MultiArray',

@@ -1,24 +1,34 @@
-"""master_ins_node: the ship master INS solution = ship truth + master INS error model."""
+"""master_ins_node: the ship master INS solution = ship truth + master INS error model, at the
+master's own rate, stamped validity time + latency and published when simulation time
+reaches the stamp; /master/fix and /truth/master_error (attitude error phi, nav frame) at
+10 Hz."""
 from __future__ import annotations
 
+from geometry_msgs.msg import Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import NavSatFix
 
 from alignment_core import pipeline
 from alignment_core.attitude import DEG
-from alignment_core.sensors import MasterInsModel
+from alignment_core.master_ins import MasterInsStage
 from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import ScenarioParameters
+
+FIX_RATE_HZ = 10.0
 
 
 class MasterInsNode(node_util.CountingNode):
     def __init__(self) -> None:
         super().__init__('master_ins_node')
         self.sc = ScenarioParameters(self).scenario
-        self.model = MasterInsModel(self.sc.master, self.sc.seed, self.sc.ship.lat_deg * DEG)
+        m = self.sc.master
+        self.stage = MasterInsStage(m, self.sc.seed, self.sc.ship.lat_deg * DEG, self.sc.rate_hz, self.sc.t0_ns)
         self.plane = pipeline.plane_of(self.sc)
         self.stream_publisher(Odometry, topics.MASTER_ODOM)
         self.stream_publisher(NavSatFix, topics.MASTER_FIX)
+        self.stream_publisher(Vector3Stamped, topics.TRUTH_MASTER_ERROR)
+        self.fix_every = max(1, round((m.rate_hz or self.sc.rate_hz) / FIX_RATE_HZ))
+        self.n_out = 0
         self.last_t: int | None = None
         self.create_subscription(Odometry, topics.SHIP_ODOM, self.on_ship, qos.STREAM)
 
@@ -29,14 +39,15 @@ class MasterInsNode(node_util.CountingNode):
             self.rejected['out_of_order'] += 1
             self.get_logger().warning(f'ship sample at {t} ns is not after {self.last_t} ns: dropped')
             return
-        s = convert.msgs_to_ship(odom)
-        m = self.model.measure(s)
-        self.send(topics.MASTER_ODOM, convert.master_to_msg(m))
-        if self.received[topics.SHIP_ODOM] % 10 == 1:
-            lat, lon, h = self.plane.to_geodetic(m.p_w)
-            self.send(topics.MASTER_FIX, convert.navsatfix(t, topics.FRAME_SHIP, lat, lon, h))
+        for out in self.stage.step(convert.msgs_to_ship(odom)):
+            m = out.sample
+            self.send(topics.MASTER_ODOM, convert.master_to_msg(m))
+            if self.n_out % self.fix_every == 0:
+                lat, lon, h = self.plane.to_geodetic(m.p_w)
+                self.send(topics.MASTER_FIX, convert.navsatfix(m.t_ns, topics.FRAME_SHIP, lat, lon, h))
+                self.send(topics.TRUTH_MASTER_ERROR, convert.vector_stamped(m.t_ns, topics.FRAME_WORLD, out.phi))
+            self.n_out += 1
         self.last_t = t
-
 
 
 def main() -> None:

@@ -11,6 +11,8 @@ from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import ScenarioParameters
 from alignment_ros.stamped_pairs import StampPairer
 
+TRUTH_RATE_HZ = 10.0          # /truth/imu_bias: on the 10 Hz grid of the filter's outputs
+
 
 class SlaveInsNode(node_util.CountingNode):
     def __init__(self) -> None:
@@ -23,6 +25,8 @@ class SlaveInsNode(node_util.CountingNode):
         self.stream_publisher(Imu, topics.AIRCRAFT_IMU)
         self.stream_publisher(Odometry, topics.TRUTH_AIRCRAFT_ODOM)
         self.stream_publisher(Vector3Stamped, topics.TRUTH_MISALIGNMENT)
+        self.stream_publisher(Imu, topics.TRUTH_IMU_BIAS)
+        self.truth_every = max(1, round(self.sc.rate_hz / TRUTH_RATE_HZ))
         self.pairs = StampPairer()
         self.create_subscription(Odometry, topics.SHIP_ODOM, self.on_odom, qos.STREAM)
         self.create_subscription(AccelStamped, topics.SHIP_ACCEL, self.on_accel, qos.STREAM)
@@ -44,6 +48,9 @@ class SlaveInsNode(node_util.CountingNode):
         odom, mis = convert.truth_to_msgs(truth)
         if imu is not None:
             self.send(topics.AIRCRAFT_IMU, convert.imu_to_msg(imu, self.gyro_var, self.accel_var))
+            if ((imu.t_ns - self.sc.t0_ns) // self.sc.dt_ns) % self.truth_every == 0:
+                bias = self.stage.errors.last_bias[-1]
+                self.send(topics.TRUTH_IMU_BIAS, convert.imu_bias_to_msg(imu.t_ns, bias[:3], bias[3:]))
         self.send(topics.TRUTH_AIRCRAFT_ODOM, odom)
         if mis is not None:
             self.send(topics.TRUTH_MISALIGNMENT, mis)
