@@ -1,17 +1,37 @@
-"""The transfer-alignment estimator: slave strapdown + 12-state error-state KF, fed in stamp
-order from the slave IMU, the LDV and the master INS (it never sees truth).
+"""The transfer-alignment estimator: slave strapdown + error-state filter, fed in stamp order
+from the slave IMU, the LDV and the master INS (it never sees truth). The error model
+(`filter.model`, models/) and the filter algorithm (`filter.algorithm`, filters/) are chosen at
+run time; the default (vm15 + kf) is the 15-state velocity-matching Kalman filter.
 
 Events at equal stamps run IMU first, then LDV, then master: the IMU sample stamped t ends
 the interval at t, so the slave solution is at t when the master sample at t is matched.
 Initialisation (first master sample): the slave copies the master attitude (times the
-nominal mounting), velocity and position at its lever arm. Velocity matching with
-computational lever-arm compensation. The aircraft is parked (zero deck velocity, surveyed
-spot) until the LDV sees it move; from then on its deck displacement is the integral of the
-LDV velocity. Closed loop: each update is fed back into the strapdown.
+nominal mounting), velocity and position at its lever arm. Lever-arm treatment
+(`lever_arm_treatment`, seed 002): `compensation` (default) puts C_m (w_m x r) into the
+reference; `none` leaves it out; `butterworth` leaves it out and low-pass filters the velocity
+difference (filters/lowpass.py: a lag the error model does not contain). The aircraft is
+parked (zero deck velocity, surveyed spot) until the LDV sees it move; from then on its deck
+displacement is the integral of the LDV velocity. Closed loop: each update is fed back into
+the strapdown (the model's `feedback`).
 
-Published misalignment: mu_hat = log(C_m^n^T C_a^n_hat), the aircraft IMU axes relative to
-the master's (aircraft FLU axes), evaluated at each matching update and held once matching
-stops (aircraft off the deck); its 1-sigma is from P_phi rotated to aircraft axes.
+Published misalignment (the model's `misalignment`): mu_hat = log(C_m^n^T C_a^n_hat), the
+aircraft IMU axes relative to the master's (aircraft FLU axes), or the mounting state for
+seed003; evaluated at each matching update and held once matching stops (aircraft off the
+deck); its 1-sigma from the covariance, in aircraft axes.
+
+Algorithms x models (config validation rejects the other combinations with a message):
+
+    model                 kf stf stf_multiple fading fading_tested carlson ud combined | ekf ukf ckf | float32
+    vm15, vm12             x  x      x          x         x          x     x     x     |  x   x   x  | linear algs
+    seed000_6              x  x      x          x         x          x     x     x     |  x   x   x  | linear algs
+    seed002_10             x  x      x          x         x          x     x     x     |  x   x   x  | linear algs
+    seed003_21, _24        x  x      x          x         x          x     x     x     |  x   x   x  | linear algs
+    seed000_large_angle    -  -      -          -         -          -     -     -     |  x   x   x  | no
+    seed001_13             (library only: no Doppler input in the engine yet)
+
+On a linear model EKF = KF and UKF/CKF compute the KF's result (their linear predict/update are
+exact). ekf/ukf/ckf run in float64 only. `lever_arm_states` needs `lever_arm_treatment:
+compensation` (the states are the error of the compensated arm) and a linear model.
 """
 from __future__ import annotations
 
@@ -23,24 +43,42 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import ARCMIN, DEG, DPH, cross3, dcm_to_rotvec_small, rotvec_to_dcm_small
-from .config import require
-from .filters import CarlsonFilter, FadingMemoryFilter, KalmanFilter, SqrtFadingFilter, StrongTrackingFilter, UDFilter
-from .models import velocity_matching as vm
+from .attitude import DEG, cross3
+from .config import ConfigError, require
+from .filters import (
+    CarlsonFilter,
+    CubatureKalmanFilter,
+    ExtendedKalmanFilter,
+    FadingMemoryFilter,
+    KalmanFilter,
+    SqrtFadingFilter,
+    StrongTrackingFilter,
+    UDFilter,
+    UnscentedKalmanFilter,
+)
+from .filters.lowpass import ButterworthLowPass
+from .models import ENGINE_MODELS, NONLINEAR_MODELS, Corrections, Match, Propagation, make_model
 from .samples import ImuSample, LdvSample, MasterSample
-from .sensors import UG
-from .strapdown import NavState, Strapdown, quat_mul, quat_to_dcm, rotvec_to_quat
+from .strapdown import NavState, Strapdown, quat_to_dcm
 from .sync import StampMerger
 
 STREAMS = ('imu', 'ldv', 'master')
+LINEAR_ALGORITHMS = ('kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud', 'combined')
+NONLINEAR_ALGORITHMS = ('ekf', 'ukf', 'ckf')
 
 
 @dataclass(frozen=True)
 class FilterConfig:
     """Alignment filter tuning and geometry (all known to the user, none from truth)."""
+    model: Literal['vm15', 'vm12', 'seed000_6', 'seed000_large_angle', 'seed002_10', 'seed003_21',
+                   'seed003_24', 'seed001_13'] = 'vm15'
     lever_arm_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
-    lever_arm_compensation: bool = True
+    lever_arm_treatment: Literal['compensation', 'none', 'butterworth'] = 'compensation'
+    butterworth_cutoff_hz: float = 0.505      # seed 002: butter(2, 0.0101) at 100 Hz
+    lever_arm_states: bool = False
+    lever_arm_sigma_m: float = 1.0
     init_attitude_sigma_deg: float = 1.0
+    init_yaw_sigma_deg: float = 0.0           # 0: init_attitude_sigma_deg
     init_velocity_sigma_mps: float = 0.1
     gyro_bias_sigma_dph: float = 0.01
     accel_bias_sigma_ug: float = 100.0
@@ -52,9 +90,8 @@ class FilterConfig:
     master_velocity_sigma_mps: float = 0.001
     parked_velocity_sigma_mps: float = 0.005
     launch_detect_mps: float = 0.05
-    master_attitude_states: bool = True
     algorithm: Literal['kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud',
-                       'combined'] = 'kf'
+                       'combined', 'ekf', 'ukf', 'ckf'] = 'kf'
     float32: bool = False
     stf_rho: float = 0.95
     stf_beta: float = 3.0      # at 100 Hz V0 (about 20 samples) scatters +-30 % around R: beta < ~2.5 fades on noise
@@ -63,6 +100,11 @@ class FilterConfig:
     fading_gamma: float = 10.0
     master_tilt_sigma_arcmin: float = 0.2
     master_heading_sigma_arcmin: float = 0.5
+    mounting_sigma_deg: float = 1.0           # seed003: prior of the mounting misalignment
+    flexure_sigma_arcmin: tuple[float, float, float] = (3.0, 3.0, 3.0)   # seed003, per axis
+    flexure_tau_s: tuple[float, float, float] = (3.0, 3.0, 3.0)
+    attitude_match_sigma_arcmin: float = 0.1  # seed003: white noise of the attitude match
+    large_angle_feedback_deg: float = 1.0     # seed000_large_angle: feed phi back below this sigma
     output_rate_hz: float = 10.0
     gate_chi2: float = 0.0
     max_gap_factor: float = 1.5
@@ -81,6 +123,30 @@ class FilterConfig:
         require(all(a >= 1.0 for a in self.stf_alpha), f"stf_alpha must all be >= 1, got {self.stf_alpha}")
         require(self.fading_factor >= 1.0, f"fading_factor must be >= 1, got {self.fading_factor}")
         require(self.fading_gamma >= 1.0, f"fading_gamma must be >= 1, got {self.fading_gamma}")
+        for k in ('butterworth_cutoff_hz', 'lever_arm_sigma_m', 'mounting_sigma_deg', 'attitude_match_sigma_arcmin',
+                  'large_angle_feedback_deg'):
+            require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
+        require(self.init_yaw_sigma_deg >= 0.0, f"init_yaw_sigma_deg must be >= 0, got {self.init_yaw_sigma_deg}")
+        require(all(v > 0.0 for v in self.flexure_sigma_arcmin + self.flexure_tau_s),
+                f"flexure_sigma_arcmin and flexure_tau_s must be > 0, got {self.flexure_sigma_arcmin}, "
+                f"{self.flexure_tau_s}")
+        self.validate_combination()
+
+    def validate_combination(self) -> None:
+        """Model x algorithm x options (the matrix in the module docstring)."""
+        m, a = self.model, self.algorithm
+        require(m in ENGINE_MODELS,
+                f"model {m} needs a Doppler radar input (/doppler/twist) that the alignment engine does not "
+                f"take yet; models the engine runs: {', '.join(ENGINE_MODELS)}")
+        if m in NONLINEAR_MODELS:
+            require(a in NONLINEAR_ALGORITHMS,
+                    f"model {m} is nonlinear: algorithm must be one of {', '.join(NONLINEAR_ALGORITHMS)}, got {a}")
+            require(not self.lever_arm_states, f"lever_arm_states is not available with the nonlinear model {m}")
+        require(not (self.float32 and a in NONLINEAR_ALGORITHMS),
+                f"algorithm {a} runs in float64 only: set float32 false or pick one of {', '.join(LINEAR_ALGORITHMS)}")
+        require(not (self.lever_arm_states and self.lever_arm_treatment != 'compensation'),
+                f"lever_arm_states estimate the error of the compensated lever arm: they need "
+                f"lever_arm_treatment compensation, got {self.lever_arm_treatment}")
 
 
 @dataclass
@@ -92,12 +158,13 @@ class Estimate:
     q_nb: np.ndarray                  # (4,) aligned slave attitude
     attitude_cov: np.ndarray          # (3, 3) rad^2, nav frame (phi)
     x: np.ndarray                     # (n,) last a-posteriori error state (before feedback)
-    sigma: np.ndarray                 # (n,) 1-sigma of the error state (n = 12 or 15)
+    sigma: np.ndarray                 # (n,) 1-sigma of the error state (n = the model's)
     bias_gyro: np.ndarray             # (3,) accumulated gyro bias estimate, rad/s
     bias_accel: np.ndarray            # (3,) accumulated accelerometer bias estimate, m/s^2
     nis: float
     updates: int
     matching: bool
+    fading: float | np.ndarray = 1.0  # last fading factor(s) of a fading / strong tracking filter
 
 
 @dataclass
@@ -114,11 +181,12 @@ class Counters:
     extra: dict = field(default_factory=dict)
 
 
-def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray):
+def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray, kinds: tuple[int, ...] | None = None):
     """The filter named by cfg.algorithm (alignment_core.filters), in float32 if asked.
 
-    stf_alpha gives the multiple-factor STF's alpha per state block (phi, dV, eps, nabla,
-    phi_m): which blocks may change faster than the model says."""
+    stf_alpha gives the multiple-factor STF's alpha per kind of state (phi, dV, eps, nabla,
+    other: phi_m, mounting, flexure, lever arm): which blocks may change faster than the model
+    says. `kinds` (the model's, one per state) maps them; default: blocks of three in that order."""
     dtype = np.float32 if cfg.float32 else np.float64
     a = cfg.algorithm
     if a == 'kf':
@@ -126,7 +194,10 @@ def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray):
     if a == 'stf':
         return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, dtype=dtype)
     if a == 'stf_multiple':
-        alpha = np.repeat(np.asarray(cfg.stf_alpha), 3)[:len(x0)]
+        if kinds is None:
+            alpha = np.repeat(np.asarray(cfg.stf_alpha), 3)[:len(x0)]
+        else:
+            alpha = np.asarray(cfg.stf_alpha)[np.asarray(kinds)]
         return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, alpha=alpha, dtype=dtype)
     if a == 'fading':
         return FadingMemoryFilter(x0, p0, lam=cfg.fading_factor, dtype=dtype)
@@ -138,6 +209,12 @@ def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray):
         return UDFilter(x0, p0, dtype=dtype)
     if a == 'combined':
         return SqrtFadingFilter(x0, p0, gamma=cfg.fading_gamma, dtype=dtype)
+    if a == 'ekf':
+        return ExtendedKalmanFilter(x0, p0)
+    if a == 'ukf':
+        return UnscentedKalmanFilter(x0, p0)
+    if a == 'ckf':
+        return CubatureKalmanFilter(x0, p0)
     raise ValueError(f'unknown filter algorithm {a!r}')
 
 
@@ -157,11 +234,16 @@ class TransferAlignment:
         self.imu_dt_nominal = 1.0 / imu_rate_hz
         self.out_period_ns = int(round(1e9 / cfg.output_rate_hz))
         self.r0 = np.asarray(cfg.lever_arm_m, dtype=float)
-        self.n = 15 if cfg.master_attitude_states else vm.N
-        self.labels = vm.labels(cfg.master_attitude_states)
-        self.noise = vm.NoiseDensities(
-            arw=cfg.arw_dpsh * DEG / 60.0, vrw=cfg.vrw_ugpshz * UG,
-            gyro_bias_rw=cfg.gyro_bias_rw_dphps * DPH, accel_bias_rw=cfg.accel_bias_rw_ugps * UG)
+        self.model = make_model(cfg)
+        self.n = self.model.n
+        self.labels = self.model.labels
+        self.compensate = cfg.lever_arm_treatment == 'compensation'
+        self.lowpass = None
+        if cfg.lever_arm_treatment == 'butterworth':
+            if not cfg.butterworth_cutoff_hz < 0.5 * imu_rate_hz:
+                raise ConfigError(f"filter.butterworth_cutoff_hz = {cfg.butterworth_cutoff_hz} must be below the "
+                                  f"Nyquist frequency {0.5 * imu_rate_hz} Hz of the {imu_rate_hz} Hz matching rate")
+            self.lowpass = ButterworthLowPass(cfg.butterworth_cutoff_hz, imu_rate_hz)
         self.R_moving = np.eye(3) * (cfg.ldv_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
         self.R_parked = np.eye(3) * (cfg.parked_velocity_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
         self.moving = False
@@ -169,8 +251,7 @@ class TransferAlignment:
         self.kf: KalmanFilter | None = None
         self.t_ins: int | None = None
         self.t0: int | None = None
-        self.bg = np.zeros(3)
-        self.ba = np.zeros(3)
+        self.corr = Corrections()
         self.deck_disp = np.zeros(3)
         self.last_ldv: LdvSample | None = None
         self.mu = np.zeros(3)
@@ -179,7 +260,16 @@ class TransferAlignment:
         self.last_nis = math.nan
         self.matching = False
         self.outputs: list[Estimate] = []
-        self._qd: dict[float, np.ndarray] = {}
+
+    @property
+    def bg(self) -> np.ndarray:
+        """Accumulated gyro bias estimate (body axes, rad/s)."""
+        return self.corr.bg
+
+    @property
+    def ba(self) -> np.ndarray:
+        """Accumulated accelerometer bias estimate (body axes, m/s^2)."""
+        return self.corr.ba
 
     # ----- input -----
     def push_imu(self, s: ImuSample) -> bool:
@@ -208,6 +298,10 @@ class TransferAlignment:
             getattr(self, '_on_' + stream)(t, item)
         return self.outputs[n0:]
 
+    def filter_diagnostics(self) -> dict:
+        """The filter's own diagnostics (nis, updates, gated, fading factor(s) if it fades)."""
+        return {} if self.kf is None else self.kf.diagnostics()
+
     # ----- events -----
     def _on_imu(self, t: int, s: ImuSample) -> None:
         self.counters.imu += 1
@@ -217,14 +311,18 @@ class TransferAlignment:
         h = (t - self.t_ins) * 1e-9
         if h > self.cfg.max_gap_factor * self.imu_dt_nominal:
             self.counters.imu_gaps += 1
-        dth = (s.gyro - self.bg) * h
-        dv = (s.accel - self.ba) * h
-        f_n = self.ins.update(dth, dv, h)
-        phi = vm.transition(self.ins.c_start, f_n, self.ins.w_ie, self.ins.w_en, h, self.n)
-        qd = self._qd.get(h)
-        if qd is None:
-            qd = self._qd[h] = vm.process_noise(self.noise, h, self.n)
-        self.kf.predict(phi, qd)
+        bg, ba = self.corr.bg, self.corr.ba
+        dth = (s.gyro - bg) * h
+        dv = (s.accel - ba) * h
+        ins = self.ins
+        f_n = ins.update(dth, dv, h)
+        st = ins.s
+        p = Propagation(ins.c_start, f_n, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
+        if self.model.nonlinear:
+            fun, jac = self.model.propagator(p)
+            self.kf.predict_nonlinear(fun, self.model.process_noise(h), jac)
+        else:
+            self.kf.predict(self.model.transition(p), self.model.process_noise(h))
         self.t_ins = t
 
     def _on_ldv(self, t: int, s: LdvSample) -> None:
@@ -240,10 +338,19 @@ class TransferAlignment:
             self.deck_disp += 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
         self.last_ldv = s
 
+    def _lever_arm(self) -> np.ndarray:
+        """The lever arm put into the reference (ship axes): the surveyed spot (plus the
+        estimated correction) under compensation, and the LDV-integrated deck displacement."""
+        if not self.compensate:
+            return self.deck_disp
+        if self.cfg.lever_arm_states:
+            return self.r0 + self.corr.dr + self.deck_disp
+        return self.r0 + self.deck_disp
+
     def _on_master(self, t: int, m: MasterSample) -> None:
         self.counters.master += 1
         c_m = quat_to_dcm(m.q_nb)
-        r = self.r0 + self.deck_disp if self.cfg.lever_arm_compensation else self.deck_disp
+        r = self._lever_arm()
         ldv = self.last_ldv if (self.last_ldv is not None and self.last_ldv.t_ns == t) else None
         v_rel = ldv.v_s if (ldv is not None and ldv.valid and self.moving) else np.zeros(3)
         u_n = c_m @ (cross3(m.w_b, r) + v_rel)
@@ -251,7 +358,7 @@ class TransferAlignment:
         if self.ins is None:
             self._initialise(t, m, c_m, r, v_ref)
         elif ldv is not None and ldv.valid and t == self.t_ins:
-            self._update(c_m, v_ref, u_n)
+            self._update(c_m, m, r, v_ref, u_n)
             self.matching = True
         else:
             self.matching = False
@@ -259,28 +366,28 @@ class TransferAlignment:
             self._emit(t)
 
     def _initialise(self, t, m, c_m, r, v_ref) -> None:
-        cfg = self.cfg
         lat, lon, h = self.plane.to_geodetic(m.p_w + self.plane.c_local_to_world(m.p_w) @ (c_m @ r))
         q = Rotation.from_matrix(c_m).as_quat()
         self.ins = Strapdown(NavState(q_nb=q, v_n=v_ref.copy(), lat=float(lat), lon=float(lon),
                                       h=float(h)))
-        p0 = np.diag(np.concatenate([
-            np.full(3, (cfg.init_attitude_sigma_deg * DEG) ** 2),
-            np.full(3, cfg.init_velocity_sigma_mps ** 2),
-            np.full(3, (cfg.gyro_bias_sigma_dph * DPH) ** 2),
-            np.full(3, (cfg.accel_bias_sigma_ug * UG) ** 2),
-            np.array([cfg.master_tilt_sigma_arcmin, cfg.master_tilt_sigma_arcmin,
-                      cfg.master_heading_sigma_arcmin]) ** 2 * ARCMIN**2][:self.n // 3]))
-        self.kf = make_filter(cfg, np.zeros(self.n), p0)
+        self.kf = make_filter(self.cfg, np.zeros(self.n), self.model.initial_covariance(), self.model.kinds)
         self.t_ins = t
         self.t0 = t
 
-    def _update(self, c_m: np.ndarray, v_ref: np.ndarray, u_n: np.ndarray) -> None:
+    def _update(self, c_m: np.ndarray, m: MasterSample, r: np.ndarray, v_ref: np.ndarray,
+                u_n: np.ndarray) -> None:
         st = self.ins.s
-        z = st.v_n - v_ref
+        z_vel = st.v_n - v_ref
+        if self.lowpass is not None:
+            z_vel = self.lowpass.step(z_vel)
+        match = Match(c_m=c_m, w_m=m.w_b, r=r, u_n=u_n, v_ref=v_ref, z_vel=z_vel,
+                      r_vel=self.R_moving if self.moving else self.R_parked, ins=st)
+        meas = self.model.measurement(match, self.corr)
         gate = self.cfg.gate_chi2 if self.cfg.gate_chi2 > 0.0 else None
-        r = self.R_moving if self.moving else self.R_parked
-        res = self.kf.update(z, vm.measurement(u_n, self.n), r, gate)
+        if meas.h is None:
+            res = self.kf.update_nonlinear(meas.z, meas.hfun, meas.r, gate)
+        else:
+            res = self.kf.update(meas.z, meas.h, meas.r, gate)
         self.last_nis = res.nis
         if not res.accepted:
             self.counters.gated += 1
@@ -288,30 +395,20 @@ class TransferAlignment:
         self.counters.updates += 1
         x = self.kf.x
         self.last_x = x.copy()
-        # feedback: C <- (I + [phi x]) C, V <- V - dV, biases accumulate
-        q = quat_mul(rotvec_to_quat(x[0:3]), st.q_nb)
-        st.q_nb = q / np.sqrt(q @ q)
-        st.v_n = st.v_n - x[3:6]
-        self.bg = self.bg + x[6:9]
-        self.ba = self.ba + x[9:12]
-        x_new = np.zeros(self.n)
-        x_new[12:] = x[12:]                 # the master's attitude error is not fed back
-        self.kf.x = x_new
-        c_na = quat_to_dcm(st.q_nb)
         p = self.kf.P
-        if self.n == 15:
-            # best estimate of the master's true attitude: C_m = (I + [phi_m x]) C_m,est
-            c_m = rotvec_to_dcm_small(x[12:15]) @ c_m
-            p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
-        else:
-            p_rel = p[0:3, 0:3]
-        self.mu = dcm_to_rotvec_small(c_m.T @ c_na)
-        self.mu_sigma = np.sqrt(np.diag(c_na.T @ p_rel @ c_na))
+        v_before = st.v_n
+        x_new = self.model.feedback(x, p, match, st, self.corr)
+        if self.lowpass is not None:
+            self.lowpass.shift(st.v_n - v_before)
+        self.kf.x = x_new
+        self.mu, self.mu_sigma = self.model.misalignment(x_new, p, match, st, self.corr)
 
     def _emit(self, t: int) -> None:
         st = self.ins.s
+        att = self.model.attitude
+        fading = self.kf.diagnostics().get('fading', 1.0)
         self.outputs.append(Estimate(
             t_ns=t, misalignment=self.mu.copy(), misalignment_sigma=self.mu_sigma.copy(),
-            q_nb=st.q_nb.copy(), attitude_cov=self.kf.P[0:3, 0:3].copy(), x=self.last_x.copy(),
+            q_nb=st.q_nb.copy(), attitude_cov=self.kf.P[att, att].copy(), x=self.last_x.copy(),
             sigma=np.sqrt(np.diag(self.kf.P)), bias_gyro=self.bg.copy(), bias_accel=self.ba.copy(),
-            nis=self.last_nis, updates=self.counters.updates, matching=self.matching))
+            nis=self.last_nis, updates=self.counters.updates, matching=self.matching, fading=fading))

@@ -5,6 +5,7 @@ its outputs do not depend on how the three streams interleave on arrival.
 """
 from __future__ import annotations
 
+import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
@@ -73,7 +74,10 @@ class AlignmentFilterNode(node_util.CountingNode):
             'rejected_nonfinite': c.rejected_nonfinite,
             'rejected_out_of_order': c.rejected_out_of_order, 'imu_gaps': c.imu_gaps,
             'imu': c.imu, 'master': c.master, 'ldv': c.ldv,
-            'pending': self.engine.merger.pending()})
+            'pending': self.engine.merger.pending(),
+            'model': self.engine.model.name, 'states': self.engine.n, 'algorithm': self.sc.filter.algorithm,
+            'lever_arm_treatment': self.sc.filter.lever_arm_treatment,
+            **_fading_values(e.fading)})
 
     def finish(self) -> None:
         # anything still queued (a stream ended early) is processed in stamp order
@@ -84,6 +88,15 @@ class AlignmentFilterNode(node_util.CountingNode):
         d = super().stats()
         d['filter'] = {k: v for k, v in vars(self.engine.counters).items() if k != 'extra'}
         return d
+
+
+def _fading_values(fading) -> dict[str, str]:
+    """The fading factor of the last update (1 = none): one number for a single factor, the
+    maximum and the per-state list for the multiple-factor STF."""
+    lam = np.atleast_1d(np.asarray(fading, dtype=float))
+    if lam.size == 1:
+        return {'fading': f'{lam[0]:.4g}'}
+    return {'fading_max': f'{lam.max():.4g}', 'fading': ' '.join(f'{v:.3g}' for v in lam)}
 
 
 def main() -> None:

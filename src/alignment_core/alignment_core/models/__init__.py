@@ -1,1 +1,54 @@
-"""Error-state models for transfer alignment (state labels, F, G, H, Q, R)."""
+"""Error-state models for transfer alignment, behind one interface (base.ErrorModel), selected at
+run time by `filter.model`:
+
+    vm15                 velocity_matching.py  phi, dV, eps, nabla, master attitude phi_m (default)
+    vm12                 velocity_matching.py  phi, dV, eps, nabla
+    seed000_6            seed000.py            phi, dV (seed 000, small angle)
+    seed000_large_angle  seed000.py            phi (rotation vector, any size), dV; nonlinear
+    seed002_10           seed002.py            dV_E, dV_N, phi, nabla_x, nabla_y, eps (horizontal)
+    seed003_21           seed003.py            phi, dV, eps, nabla, mounting mu, flexure theta, theta';
+                                               velocity + attitude matching
+    seed003_24           seed003.py            seed003_21 + master attitude phi_m
+    seed001_13           seed001.py            Doppler-aided in-flight model (library only: the engine
+                                               has no Doppler input yet)
+
+`filter.lever_arm_states: true` appends dr (3) to any linear velocity-matching model
+(lever_arm.py). Matching modes: velocity (all but seed003), velocity + attitude (seed003_*);
+yaw-only and angular-rate matching are not implemented.
+"""
+from __future__ import annotations
+
+from .base import Corrections, ErrorModel, Match, Measurement, Propagation
+from .lever_arm import LeverArmStates
+from .seed000 import Seed000LargeAngle, Seed000Linear
+from .seed002 import Seed002Horizontal
+from .seed003 import Seed003VelocityAttitude
+from .velocity_matching import VelocityMatching
+
+MODELS = ('vm15', 'vm12', 'seed000_6', 'seed000_large_angle', 'seed002_10', 'seed003_21', 'seed003_24',
+          'seed001_13')
+NONLINEAR_MODELS = ('seed000_large_angle',)
+ENGINE_MODELS = MODELS[:-1]            # seed001_13 needs a Doppler stream the engine lacks
+
+__all__ = ['Corrections', 'ErrorModel', 'Match', 'Measurement', 'Propagation', 'MODELS', 'NONLINEAR_MODELS',
+           'ENGINE_MODELS', 'make_model']
+
+
+def make_model(cfg) -> ErrorModel:
+    """The engine's error model for a FilterConfig (`model`, `lever_arm_states`)."""
+    name = cfg.model
+    if name in ('vm15', 'vm12'):
+        base: ErrorModel = VelocityMatching(cfg, master_states=name == 'vm15')
+    elif name == 'seed000_6':
+        base = Seed000Linear(cfg)
+    elif name == 'seed000_large_angle':
+        base = Seed000LargeAngle(cfg)
+    elif name == 'seed002_10':
+        base = Seed002Horizontal(cfg)
+    elif name in ('seed003_21', 'seed003_24'):
+        base = Seed003VelocityAttitude(cfg, master_states=name == 'seed003_24')
+    else:
+        raise ValueError(f'model {name!r} cannot run in the transfer-alignment engine')
+    if cfg.lever_arm_states:
+        return LeverArmStates(base, cfg.lever_arm_sigma_m)
+    return base

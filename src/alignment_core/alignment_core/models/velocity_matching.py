@@ -16,12 +16,33 @@ are rotated with the erroneous attitude, so z = dV - [u x] phi_m + v, H = [0 I 0
 The aircraft-vs-master misalignment error is phi - phi_m: without these states the filter
 reports the slave's alignment to a master it believes perfect, and its sigma is too small
 whenever the master's own attitude error matters (a long deck alignment).
+
+`VelocityMatching` wraps these functions in the ErrorModel interface (models/base.py): model
+names `vm12` and `vm15` (the default). Its numbers are the engine's before the interface
+existed, operation for operation.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..attitude import ARCMIN, DEG, DPH, rotvec_to_dcm_small
+from ..sensors import UG
+from ..strapdown import NavState, quat_mul, quat_to_dcm, rotvec_to_quat
+from .base import (
+    DV,
+    EPS,
+    NABLA,
+    OTHER,
+    PHI,
+    Corrections,
+    ErrorModel,
+    Match,
+    Measurement,
+    Propagation,
+    relative_misalignment,
+)
 
 LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dV_U', 'eps_x', 'eps_y', 'eps_z',
           'nabla_x', 'nabla_y', 'nabla_z')
@@ -85,3 +106,96 @@ def process_noise(q: NoiseDensities, h: float, n: int = N) -> np.ndarray:
     C_b^n Qc C_b^nT = Qc and Qd does not depend on the attitude; phi_m has no process noise."""
     return np.diag(np.repeat([q.arw**2 * h, q.vrw**2 * h, q.gyro_bias_rw**2 * h,
                               q.accel_bias_rw**2 * h, 0.0][:n // 3], 3))
+
+
+def continuous(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray, n: int = N) -> np.ndarray:
+    """F (n, n) of the continuous model (transition() is I + F h + (F h)^2 / 2 of it)."""
+    f = np.zeros((n, n))
+    _skew_into(f, 0, 0, -(w_ie + w_en))
+    f[0:3, 6:9] = -c_nb
+    _skew_into(f, 3, 0, f_n)
+    _skew_into(f, 3, 3, -(2.0 * w_ie + w_en))
+    f[3:6, 9:12] = c_nb
+    return f
+
+
+def noise_densities(cfg) -> NoiseDensities:
+    """The continuous noise densities of a FilterConfig, in SI units."""
+    return NoiseDensities(arw=cfg.arw_dpsh * DEG / 60.0, vrw=cfg.vrw_ugpshz * UG,
+                          gyro_bias_rw=cfg.gyro_bias_rw_dphps * DPH, accel_bias_rw=cfg.accel_bias_rw_ugps * UG)
+
+
+def attitude_variances(cfg) -> np.ndarray:
+    """(3,) initial attitude variances: init_attitude_sigma_deg, yaw from init_yaw_sigma_deg if > 0."""
+    v = np.full(3, (cfg.init_attitude_sigma_deg * DEG) ** 2)
+    if cfg.init_yaw_sigma_deg > 0.0:
+        v[2] = (cfg.init_yaw_sigma_deg * DEG) ** 2
+    return v
+
+
+def master_variances(cfg) -> np.ndarray:
+    """(3,) prior variances of the master INS attitude error (tilt, tilt, heading)."""
+    return np.array([cfg.master_tilt_sigma_arcmin, cfg.master_tilt_sigma_arcmin,
+                     cfg.master_heading_sigma_arcmin]) ** 2 * ARCMIN**2
+
+
+class VelocityMatching(ErrorModel):
+    """vm12 / vm15: phi, dV, eps, nabla (+ phi_m), velocity matching (module docstring)."""
+    velocity_rows = (0, 1, 2)
+
+    def __init__(self, cfg, master_states: bool) -> None:
+        self.cfg = cfg
+        self.name = 'vm15' if master_states else 'vm12'
+        self.labels = labels(master_states)
+        self.kinds = (PHI,) * 3 + (DV,) * 3 + (EPS,) * 3 + (NABLA,) * 3 + (OTHER,) * 3 * master_states
+        self._n = len(self.labels)
+        self.noise = noise_densities(cfg)
+        self._qd: dict[float, np.ndarray] = {}
+
+    def initial_covariance(self) -> np.ndarray:
+        cfg = self.cfg
+        return np.diag(np.concatenate([
+            attitude_variances(cfg),
+            np.full(3, cfg.init_velocity_sigma_mps ** 2),
+            np.full(3, (cfg.gyro_bias_sigma_dph * DPH) ** 2),
+            np.full(3, (cfg.accel_bias_sigma_ug * UG) ** 2),
+            master_variances(cfg)][:self._n // 3]))
+
+    def continuous(self, p: Propagation) -> np.ndarray:
+        return continuous(p.c_nb, p.f_n, p.w_ie, p.w_en, self._n)
+
+    def transition(self, p: Propagation) -> np.ndarray:
+        return transition(p.c_nb, p.f_n, p.w_ie, p.w_en, p.h, self._n)
+
+    def process_noise(self, h: float) -> np.ndarray:
+        qd = self._qd.get(h)
+        if qd is None:
+            qd = self._qd[h] = process_noise(self.noise, h, self._n)
+        return qd
+
+    def measurement(self, m: Match, corr: Corrections) -> Measurement:
+        return Measurement(m.z_vel, measurement(m.u_n, self._n), m.r_vel)
+
+    def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        """C <- (I + [phi x]) C (exactly: exp([phi x]) C), V <- V - dV, biases accumulate;
+        the master's attitude error is not fed back (it is the master's)."""
+        q = quat_mul(rotvec_to_quat(x[0:3]), nav.q_nb)
+        nav.q_nb = q / np.sqrt(q @ q)
+        nav.v_n = nav.v_n - x[3:6]
+        corr.bg = corr.bg + x[6:9]
+        corr.ba = corr.ba + x[9:12]
+        x_new = np.zeros(self._n)
+        x_new[12:] = x[12:]
+        return x_new
+
+    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
+        """log(C_m^T C_a) with, for vm15, C_m corrected by phi_m (C_m = (I + [phi_m x]) C_m,est)
+        and the sigma of phi - phi_m."""
+        c_na = quat_to_dcm(nav.q_nb)
+        c_m = m.c_m
+        if self._n == 15:
+            c_m = rotvec_to_dcm_small(x[12:15]) @ c_m
+            p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
+        else:
+            p_rel = p[0:3, 0:3]
+        return relative_misalignment(c_m, c_na, p_rel)
