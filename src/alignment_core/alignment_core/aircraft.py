@@ -1,9 +1,13 @@
-"""The aircraft on the deck and through the catapult stroke, and its ideal IMU output.
+"""The aircraft on the deck, through the catapult stroke and in flight, and its ideal IMU output.
 
-The aircraft's IMU sits at lever arm r (ship FLU axes, from the master INS) with a mounting
-misalignment mu (rotation vector, aircraft FLU axes: C_a^s = exp([mu x])). During the stroke
-it moves along the catapult track (the aircraft's x axis) with r(t) = r0 + s(t) u; after the
-stroke it flies free at its release velocity and attitude (constant in the nav frame).
+The aircraft's IMU sits at lever arm r (ship FLU axes, from the master INS), its nominal axes
+turned by the heading on deck psi_d (`heading_on_deck_deg`, from the bow, clockwise: the
+angled deck's waist catapults are about -9 deg) and then by a mounting misalignment mu
+(rotation vector, aircraft FLU axes): C_a^s = Rz(-psi_d) exp([mu x]). The catapult track is the
+aircraft's x axis, u = C_a^s e_x; on it the aircraft moves r(t) = r0 + s(t) u (catapult.py:
+hold-back creep, then the stroke's acceleration profile). After the release it either keeps
+its release velocity and attitude (constant in the nav frame; `aircraft.flight.segments` '')
+or flies a segment list (flight_profile.py: climbs, turns, with Earth rate and transport rate).
 
 Ideal increments are integrals over each sample interval of omega_ib^a and f^a evaluated by
 3-point Gauss-Legendre quadrature on the ship state, which is interpolated inside the
@@ -34,39 +38,33 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth
-from .attitude import ARCMIN, G0, cross, quat_mul_batch, quat_to_dcm_batch, rotvec_to_dcm_batch
+from .attitude import ARCMIN, DEG, cross, quat_mul_batch, quat_to_dcm_batch, rotvec_to_dcm_batch
+from .catapult import CatapultConfig, CatapultMotion, check_catapult_grid
 from .config import require
 from .deck_flexure import FlexureConfig, FlexureProcess, right_jacobian
+from .flight_profile import FlightConfig, FlightPath
 from .samples import AircraftTruth, ShipBatch, ShipSample
 from .vibration import Vibration, VibrationConfig
+
+__all__ = ['AircraftConfig', 'AircraftKinematics', 'CatapultConfig', 'FlightConfig', 'check_catapult_grid']
 
 GL_NODES = np.array([0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6)])
 GL_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 18.0
 
 
 @dataclass(frozen=True)
-class CatapultConfig:
-    """Catapult stroke: constant acceleration along the aircraft axis (seed 000: 2 g, 3 s)."""
-    enabled: bool = True
-    launch_time_s: float = 60.0
-    stroke_s: float = 3.0
-    accel_g: float = 2.0
-
-    def validate(self) -> None:
-        require(self.launch_time_s >= 0.0, f"launch_time_s must be >= 0, got {self.launch_time_s}")
-        require(0.0 < self.stroke_s <= 10.0, f"stroke_s must be in (0, 10], got {self.stroke_s}")
-        require(0.0 < self.accel_g <= 8.0, f"accel_g must be in (0, 8], got {self.accel_g}")
-
-
-@dataclass(frozen=True)
 class AircraftConfig:
-    """Deck spot and mounting. Default misalignment is seed 000's (10', 15', -30') in its
-    right-forward-up axes, i.e. (15', -10', -30') in FLU (x fwd/roll, y left, z up/yaw)."""
+    """Deck spot, heading on deck and mounting, catapult and flight. Default misalignment is
+    seed 000's (10', 15', -30') in its right-forward-up axes, i.e. (15', -10', -30') in FLU
+    (x fwd/roll, y left, z up/yaw). heading_on_deck_deg: the aircraft's (and the catapult
+    track's) nominal heading from the ship's bow, clockwise (0: a bow catapult)."""
     lever_arm_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
     misalignment_arcmin: tuple[float, float, float] = (15.0, -10.0, -30.0)
+    heading_on_deck_deg: float = 0.0
     catapult: CatapultConfig = field(default_factory=CatapultConfig)
     vibration: VibrationConfig = field(default_factory=VibrationConfig)
     flexure: FlexureConfig = field(default_factory=FlexureConfig)
+    flight: FlightConfig = field(default_factory=FlightConfig)
 
     def validate(self) -> None:
         r = np.asarray(self.lever_arm_m)
@@ -74,14 +72,8 @@ class AircraftConfig:
                 f"lever_arm_m out of range (|horizontal| <= 200 m, |z| <= 50 m): {self.lever_arm_m}")
         require(np.all(np.abs(self.misalignment_arcmin) <= 600.0),
                 f"misalignment_arcmin must be within +-600' per axis: {self.misalignment_arcmin}")
-
-
-def check_catapult_grid(cat: CatapultConfig, rate_hz: float) -> None:
-    """The stroke's start and end must be sample instants (no interval straddles them)."""
-    for name, t in (('launch_time_s', cat.launch_time_s),
-                    ('launch_time_s + stroke_s', cat.launch_time_s + cat.stroke_s)):
-        require(abs(t * rate_hz - round(t * rate_hz)) < 1e-6,
-                f"aircraft.catapult.{name} = {t} s must fall on the {rate_hz} Hz sample grid")
+        require(-180.0 <= self.heading_on_deck_deg <= 180.0,
+                f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
 
 
 class AircraftKinematics:
@@ -95,20 +87,22 @@ class AircraftKinematics:
         self.r0 = np.asarray(cfg.lever_arm_m, dtype=float)
         self.mu = np.asarray(cfg.misalignment_arcmin, dtype=float) * ARCMIN
         self.q_sa = Rotation.from_rotvec(self.mu).as_quat()
+        if cfg.heading_on_deck_deg != 0.0:
+            half = -0.5 * cfg.heading_on_deck_deg * DEG                  # ROS yaw is anticlockwise
+            self.q_sa = quat_mul_batch(np.array([0.0, 0.0, np.sin(half), np.cos(half)]), self.q_sa)
         self.c_sa = quat_to_dcm_batch(self.q_sa)                         # C_a^s
         self.track = self.c_sa[:, 0]                                     # aircraft x in ship axes
         cat = cfg.catapult
         self.enabled = cat.enabled
-        self.acc = cat.accel_g * G0
         if cat.enabled:
             check_catapult_grid(cat, rate_hz)
-            # launch and release as sample instants, computed exactly as tau is from stamps
-            dt_ns = int(round(1e9 / rate_hz))
-            self.launch = int(round(cat.launch_time_s * rate_hz)) * dt_ns / 1e9
-            self.release = int(round((cat.launch_time_s + cat.stroke_s) * rate_hz)) * dt_ns / 1e9
+            self.catapult = CatapultMotion(cat, rate_hz)
+            self.launch, self.release = self.catapult.launch, self.catapult.release
         else:
             self.launch = self.release = np.inf
         self.release_state: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.flying = bool(cfg.flight.parsed())                          # segments given
+        self.path: FlightPath | None = None                              # set at the release
         vib = cfg.vibration
         self.vib = Vibration(vib, self.launch) if (vib.enabled and cat.enabled) else None
         self.vib_motion = self.vib is not None and vib.mode == 'motion'
@@ -131,11 +125,7 @@ class AircraftKinematics:
         if not self.enabled:
             z = np.zeros(tau.shape + (3,))
             return self.r0 + z, z, z
-        s_t = np.clip(tau - self.launch, 0.0, self.release - self.launch)
-        moving = ((tau > self.launch) & (tau <= self.release)).astype(float)
-        s = 0.5 * self.acc * s_t**2
-        sd = self.acc * s_t
-        sdd = self.acc * moving
+        s, sd, sdd = self.catapult.along(tau)
         r = self.r0 + s[..., None] * self.track
         if not self.vib_motion:
             return r, sd[..., None] * self.track, sdd[..., None] * self.track
@@ -176,6 +166,10 @@ class AircraftKinematics:
 
     def _imu(self, c_na, w_na, v_p, a_p, p_p):
         lat, _, h = self.plane.to_geodetic(p_p)
+        return self._imu_at(c_na, w_na, v_p, a_p, lat, h)
+
+    def _imu_at(self, c_na, w_na, v_p, a_p, lat, h):
+        """omega_ib^a and f^a from the nav-frame motion at geodetic latitude and height."""
         w_ie = earth.omega_ie_n(lat)
         w_en = earth.omega_en_n(lat, h, v_p)
         w_ib = w_na + np.einsum('...ji,...j->...i', c_na, w_ie + w_en)
@@ -213,11 +207,18 @@ class AircraftKinematics:
                 self.release_state = (c_na[k].copy(), v_p[k].copy(), p_p[k].copy())
                 self.release_quat = q[k].copy() if self.flex is not None else quat_mul_batch(sb.q_nb[k], self.q_sa)
                 self.release_v_world = self.plane.c_local_to_world(p_p[k]) @ v_p[k]
+                if self.flying and self.path is None:
+                    self.path = FlightPath(self.cfg.flight, self.plane, tau[k], self.release_quat,
+                                           w_na[k], v_p[k], p_p[k])
         if np.any(~on):
             if self.release_state is None:
                 raise RuntimeError('free flight before the release state was seen')
-            c_na[~on], w_na[~on], v_p[~on], _, p_p[~on] = self._free(tau[~on])
-            q[~on] = self.release_quat
+            if self.path is None:
+                c_na[~on], w_na[~on], v_p[~on], _, p_p[~on] = self._free(tau[~on])
+                q[~on] = self.release_quat
+            else:
+                st = self.path.state(tau[~on])
+                c_na[~on], w_na[~on], v_p[~on], p_p[~on], q[~on] = st.c_na, st.w_na, st.v_n, st.p_w, st.q
         return {'p_w': p_p, 'q_nb': q, 'v_b': np.einsum('kji,kj->ki', c_na, v_p), 'w_b': w_na,
                 'on_deck': on}
 
@@ -243,7 +244,10 @@ class AircraftKinematics:
         if np.any(free):
             if self.release_state is None:
                 raise RuntimeError('free flight before the release state was seen')
-            w_ib[free], f[free] = self._imu(*self._free(tau[free]))
+            if self.path is None:
+                w_ib[free], f[free] = self._imu(*self._free(tau[free]))
+            else:
+                w_ib[free], f[free] = 0.0, 0.0                           # replaced below
         deck = ~free
         if np.any(deck):
             hk = h[deck][:, None, None]                                  # (K, 1, 1)
@@ -280,8 +284,42 @@ class AircraftKinematics:
                                                            flex, vib_acc=not self.vib_motion))
         dth = h[:, None] * np.einsum('kjc,j->kc', w_ib, GL_WEIGHTS)
         dv = h[:, None] * np.einsum('kjc,j->kc', f, GL_WEIGHTS)
+        if self.path is not None and np.any(free):
+            dth[free], dv[free] = self._flight_increments(tau0[free], tau0[free] + h[free])
         if self.vib is not None:
             dv = dv + self._vib_dv(tau0, tau0 + h, deck)
+        return dth, dv
+
+    def _flight_state_imu(self, tau) -> tuple[np.ndarray, np.ndarray]:
+        st = self.path.state(tau)
+        return self._imu_at(st.c_na, st.w_na, st.v_n, st.a_n, st.lat, st.h)
+
+    def _flight_increments(self, tau0: np.ndarray, tau1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Increments over flight intervals (K,): 3-point Gauss-Legendre on each piece between
+        the flight's breakpoints (segment and transition boundaries), summed per interval."""
+        bp = self.path.breakpoints
+        lo, hi = np.searchsorted(bp, tau0, side='right'), np.searchsorted(bp, tau1, side='left')
+        a, b, owner = [tau0], [tau1], [np.arange(len(tau0))]
+        split = np.flatnonzero(hi > lo)
+        if len(split):
+            a, b, owner = [tau0.copy()], [tau1.copy()], [np.arange(len(tau0))]
+            for k in split:
+                cuts = np.concatenate([[tau0[k]], bp[lo[k]:hi[k]], [tau1[k]]])
+                b[0][k] = cuts[1]
+                a.append(cuts[1:-1])
+                b.append(cuts[2:])
+                owner.append(np.full(len(cuts) - 2, k))
+        a, b, owner = np.concatenate(a), np.concatenate(b), np.concatenate(owner)
+        hp = b - a
+        nodes = a[:, None] + GL_NODES[None, :] * hp[:, None]
+        w_ib, f = self._flight_state_imu(nodes)
+        dth_p = hp[:, None] * np.einsum('kjc,j->kc', w_ib, GL_WEIGHTS)
+        dv_p = hp[:, None] * np.einsum('kjc,j->kc', f, GL_WEIGHTS)
+        if not len(split):
+            return dth_p, dv_p
+        dth, dv = np.zeros((len(tau0), 3)), np.zeros((len(tau0), 3))
+        np.add.at(dth, owner, dth_p)
+        np.add.at(dv, owner, dv_p)
         return dth, dv
 
     def _vib_dv(self, tau0, tau1, deck):
@@ -305,7 +343,10 @@ class AircraftKinematics:
         if np.any(free):
             if self.release_state is None:
                 raise RuntimeError('free flight before the release state was seen')
-            w_ib[free], f[free] = self._imu(*self._free(tau1[free]))
+            if self.path is None:
+                w_ib[free], f[free] = self._imu(*self._free(tau1[free]))
+            else:
+                w_ib[free], f[free] = self._flight_state_imu(tau1[free])
         deck = ~free
         if np.any(deck):
             b = s1.slice(deck) if not np.all(deck) else s1

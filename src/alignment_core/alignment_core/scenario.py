@@ -12,6 +12,7 @@ import yaml
 
 from . import sensor_presets
 from .aircraft import AircraftConfig, check_catapult_grid
+from .catapult import track_length_from_dict
 from .config import ConfigError, build, require, to_dict
 from .sensor_timing import check_rate
 from .sensors import DopplerConfig, ImuConfig, LdvConfig, MasterConfig
@@ -118,7 +119,7 @@ def from_dict(data: dict, overrides: dict[str, object] | None = None) -> Scenari
         _set_dotted(data, k, v)
     sensor_presets.apply(data)           # imu.preset / master.preset fill the keys not given
     # the filter and the LDV know the surveyed deck spot unless told otherwise; the LDV
-    # beam covers the catapult track (stroke length + 0.5 m), so matching ends at the release
+    # beam covers the catapult track (hold-back creep + stroke length + 0.5 m), so matching ends at the release
     ac = data.get('aircraft') or {}
     if 'lever_arm_m' in ac:
         data.setdefault('filter', {})
@@ -134,9 +135,7 @@ def from_dict(data: dict, overrides: dict[str, object] | None = None) -> Scenari
         data.setdefault('ldv', {})
         if data['ldv'] is None:
             data['ldv'] = {}
-        stroke = float(cat.get('stroke_s', 3.0))
-        acc = float(cat.get('accel_g', 2.0)) * 9.80665
-        data['ldv'].setdefault('track_length_m', 0.5 * acc * stroke**2 + 0.5)
+        data['ldv'].setdefault('track_length_m', track_length_from_dict(cat) + 0.5)
     return build(Scenario, data)
 
 
