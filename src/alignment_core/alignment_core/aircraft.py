@@ -77,7 +77,9 @@ class AircraftConfig:
 
 
 class AircraftKinematics:
-    """Relative motion on the deck, release state and ideal IMU increments."""
+    """Relative motion on the deck, release state and ideal IMU increments. With flight
+    segments, `path` (flight_profile.FlightPath, set when the release sample is seen) gives
+    the flight truth at any time after the release: `path.state(tau)`."""
 
     def __init__(self, cfg: AircraftConfig, plane: earth.TangentPlane, rate_hz: float,
                  output: str = 'increment', seed: int = 0) -> None:

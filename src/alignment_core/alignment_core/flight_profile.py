@@ -41,7 +41,7 @@ lines, each `kind key=value ...`, e.g.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -293,7 +293,7 @@ class FlightPath:
             t_start[i], chi_start[i], h_start[i] = t, chi, h
             q_from[i], q_to[i] = q, (vh, vu, w)
             if s.duration_s > 0.0 and i < len(segs) - 1:
-                val, _, _, integ = self._blend(np.array([s.duration_s]), T[i], q_from[i], q_to[i])
+                _, _, _, integ = self._blend(np.array([s.duration_s]), T[i], q_from[i], q_to[i])
                 chi, h = chi + integ[0, 2], h + integ[0, 1]
                 t += s.duration_s
             q = q_to[i].copy()
@@ -429,12 +429,3 @@ class FlightPath:
         v_b = np.einsum('...ji,...j->...i', c_na, m['v_n'])
         return FlightState(q=q, c_na=c_na, w_na=w_na, v_n=m['v_n'], a_n=m['a_n'], v_b=v_b,
                            lat=lat, lon=lon, h=h, p_w=p_w, mu=m['mu'])
-
-    def turn_rate_target(self, i: int) -> float:
-        """Segment i's steady heading rate (rad/s, positive to the right / clockwise)."""
-        return -float(self.q_to[i, 2])
-
-
-def segment_fields() -> list[str]:
-    """Keys a segment may carry (for documentation and error messages)."""
-    return [f.name for f in fields(FlightSegment) if f.name != 'kind']
