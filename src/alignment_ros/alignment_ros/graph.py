@@ -137,7 +137,9 @@ def main(argv: list[str] | None = None) -> int:
     procs: dict[str, subprocess.Popen] = {}
     wall0 = time.monotonic()
     try:
-        procs['recorder'] = start_recorder(out, out / 'bag', end_s, list(topics.TOPIC_TYPES), END_TOPICS)
+        # optional sensors' topics are recorded only when enabled (no empty topics in the bag)
+        recorded = [t for t in topics.TOPIC_TYPES if t != topics.DOPPLER_TWIST or sc.doppler.enabled]
+        procs['recorder'] = start_recorder(out, out / 'bag', end_s, recorded, END_TOPICS)
         for n in NODES:
             procs[n] = start(n, params, out)
         procs['ship_motion_node'] = start(
