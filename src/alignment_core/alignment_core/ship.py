@@ -17,7 +17,7 @@ acceleration by its exact derivative, and the nav-frame acceleration of the grou
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -54,7 +54,15 @@ class ShipConfig:
     0 = following); `n_frequencies` log-spaced bins on `omega_min`..`omega_max` rad/s (0 = auto);
     `rao_source` 'closed_form' (a 310 m carrier, `rao.CarrierParams`, with `roll_period_s` and
     `roll_zeta` (0 = 0.05 at 0 kn to 0.10 at 30 kn)) or a path to an MSS vessel .mat file;
-    `course_keeping` 'straight' (constant course and speed; the only low-frequency model yet).
+    `course_keeping` 'straight' (constant course and speed) or 'mmg': the low-frequency
+    track from the MMG manoeuvring model (`mmg.py`, `ship_model` 'carrier' or 'kvlcc2')
+    steered by a PID autopilot (`autopilot_kp` rad/rad, `autopilot_ki` 1/s, `autopilot_kd`
+    s; rudder `rudder_max_deg`, `rudder_rate_dps`), integrated by RK4 every `mmg_step_s`
+    (`course_keeping.py`); the schedule orders `speed_kn` on `heading_deg`, then from
+    `turn_at_s` (negative: never) heading `turn_to_deg` (at `turn_rate_dps`, 0 = at once)
+    and speed `speed_to_kn` (negative: unchanged); steady wind `wind_speed_kn` from
+    `wind_from_deg` (true, from North clockwise). In paper mode the MMG ship also feels
+    seed 002's box-ship forces of a regular wave (`box_ship_waves.py`).
     """
     mode: Literal['paper', 'spectral'] = 'paper'
     sea_state: int = 4
@@ -78,7 +86,20 @@ class ShipConfig:
     rao_source: str = 'closed_form'
     roll_period_s: float = 20.0
     roll_zeta: float = 0.0
-    course_keeping: Literal['straight'] = 'straight'
+    course_keeping: Literal['straight', 'mmg'] = 'straight'
+    ship_model: Literal['carrier', 'kvlcc2'] = 'carrier'
+    autopilot_kp: float = 2.0
+    autopilot_ki: float = 0.01
+    autopilot_kd: float = 60.0
+    rudder_max_deg: float = 35.0
+    rudder_rate_dps: float = 2.5
+    turn_at_s: float = -1.0
+    turn_to_deg: float = 0.0
+    turn_rate_dps: float = 0.0
+    speed_to_kn: float = -1.0
+    wind_speed_kn: float = 0.0
+    wind_from_deg: float = 0.0
+    mmg_step_s: float = 0.5
 
     def validate(self) -> None:
         require(0 <= self.sea_state <= 9, f"sea_state must be a WMO code 0-9, got {self.sea_state}")
@@ -104,6 +125,28 @@ class ShipConfig:
                 f"omega_min must be below omega_max, got {self.omega_min}, {self.omega_max}")
         require(5.0 <= self.roll_period_s <= 60.0, f"roll_period_s must be in [5, 60], got {self.roll_period_s}")
         require(0.0 <= self.roll_zeta < 1.0, f"roll_zeta must be in [0, 1) (0 = speed dependent), got {self.roll_zeta}")
+        require(self.autopilot_kp > 0.0, f"autopilot_kp must be > 0 (rad of rudder per rad of heading "
+                                         f"error), got {self.autopilot_kp}")
+        require(self.autopilot_ki >= 0.0, f"autopilot_ki must be >= 0 (1/s), got {self.autopilot_ki}")
+        require(self.autopilot_kd >= 0.0, f"autopilot_kd must be >= 0 (s), got {self.autopilot_kd}")
+        require(0.0 < self.rudder_max_deg <= 45.0,
+                f"rudder_max_deg must be in (0, 45], got {self.rudder_max_deg}")
+        require(0.0 < self.rudder_rate_dps <= 20.0,
+                f"rudder_rate_dps must be in (0, 20], got {self.rudder_rate_dps}")
+        require(self.turn_at_s < 0.0 or 0.0 <= self.turn_to_deg <= 360.0,
+                f"turn_to_deg must be a heading in [0, 360], got {self.turn_to_deg}")
+        require(self.turn_rate_dps >= 0.0,
+                f"turn_rate_dps must be >= 0 (0 = ordered at once), got {self.turn_rate_dps}")
+        require(self.speed_to_kn < 0.0 or 1.0 <= self.speed_to_kn <= 40.0,
+                f"speed_to_kn must be negative (unchanged) or in [1, 40], got {self.speed_to_kn}")
+        require(0.0 <= self.wind_speed_kn <= 150.0,
+                f"wind_speed_kn must be in [0, 150], got {self.wind_speed_kn}")
+        require(-360.0 <= self.wind_from_deg <= 360.0,
+                f"wind_from_deg must be in [-360, 360], got {self.wind_from_deg}")
+        require(0.01 <= self.mmg_step_s <= 2.0, f"mmg_step_s must be in [0.01, 2] s, got {self.mmg_step_s}")
+        if self.course_keeping == 'mmg':
+            require(self.speed_kn >= 1.0, f"speed_kn must be >= 1 with course_keeping 'mmg' (the MMG "
+                                          f"model is a manoeuvring model at speed), got {self.speed_kn}")
         if self.mode == 'spectral' and self.rao_source != 'closed_form':
             path = os.path.expandvars(os.path.expanduser(self.rao_source))
             require(os.path.isfile(path), f"rao_source: RAO file not found: {self.rao_source!r} "
@@ -118,6 +161,26 @@ def make_motion(cfg: ShipConfig, seed: int):
         from .ship_waves import SpectralShipMotion
         return SpectralShipMotion(cfg, seed)
     raise ConfigError(f"ship.mode {cfg.mode!r} is not available")
+
+
+def make_track(cfg: ShipConfig, external=None):
+    """The low-frequency MMG track of `course_keeping: mmg` (course_keeping.ManoeuvringTrack),
+    with optional external forces `external(t, north, east, psi) -> (X, Y, N, K)`."""
+    from . import mmg
+    from .autopilot import Autopilot, CourseSchedule, SteeringGear
+    from .course_keeping import ManoeuvringTrack
+    speed = cfg.speed_kn * KNOT
+    zeta = cfg.roll_zeta if cfg.roll_zeta > 0.0 else 0.05 + 0.05 * min(speed / (30.0 * KNOT), 1.0)
+    ship = replace(mmg.SHIPS[cfg.ship_model], roll_period_s=cfg.roll_period_s, roll_zeta=zeta)
+    model = mmg.MmgModel(ship, mmg.Wind(cfg.wind_speed_kn * KNOT, cfg.wind_from_deg * DEG))
+    rmax = cfg.rudder_max_deg * DEG
+    autopilot = Autopilot(cfg.autopilot_kp, cfg.autopilot_ki, cfg.autopilot_kd, rmax)
+    gear = SteeringGear(rmax, cfg.rudder_rate_dps * DEG, gain=min(2.0, 1.0 / cfg.mmg_step_s))
+    sched = CourseSchedule(heading0=cfg.heading_deg * DEG, speed0=speed, turn_at=cfg.turn_at_s,
+                           turn_to=cfg.turn_to_deg * DEG, turn_rate=cfg.turn_rate_dps * DEG,
+                           speed_to=cfg.speed_to_kn * KNOT if cfg.speed_to_kn >= 0.0 else -1.0)
+    return ManoeuvringTrack(model, autopilot, gear, sched, cfg.lat_deg * DEG, cfg.lon_deg * DEG,
+                            cfg.mmg_step_s, external)
 
 
 class PaperShipMotion:
@@ -147,6 +210,26 @@ class PaperShipMotion:
         self.lat0 = cfg.lat_deg * DEG
         self.lon0 = cfg.lon_deg * DEG
         self.plane = earth.TangentPlane(self.lat0, self.lon0, 0.0)
+        self.track = None
+        if cfg.course_keeping == 'mmg':
+            self.track = make_track(cfg, self._box_waves(cfg, seed, s))
+
+    @staticmethod
+    def _box_waves(cfg: ShipConfig, seed: int, scale: float):
+        """Seed 002's regular wave on the box ship (eq 7): height the sea state's mean Hs
+        (Bales), period its most probable Tp, travelling `wave_heading_deg` from the initial
+        bow; random phase (own stream)."""
+        if cfg.sea_state == 0 or scale == 0.0:
+            return None
+        from . import mmg, sea_state
+        from .box_ship_waves import BoxShipWaves
+        sea = sea_state.resolve(cfg.sea_state)
+        ship = mmg.SHIPS[cfg.ship_model]
+        eps = stage_rng(seed, 'ship_box_wave').uniform(0.0, 2.0 * np.pi)
+        waves = BoxShipWaves(0.5 * sea.hs_m * scale, 2.0 * np.pi / sea.tp_s,
+                             (cfg.heading_deg + cfg.wave_heading_deg) * DEG, eps, ship.lpp,
+                             ship.beam, ship.draft, ship.z_h, ship.rho)
+        return waves.forces
 
     def euler(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """ROS Euler angles (roll, pitch, yaw), their first and second derivatives; (N, 3)."""
@@ -174,6 +257,8 @@ class PaperShipMotion:
     def samples(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int = 0) -> list[ShipSample]:
         """Ship samples k0 .. k0+len(t)-1 at times t (s since start); stamps t0_ns + k*dt_ns."""
         t = np.asarray(t, dtype=float)
+        if self.track is not None:
+            return self._samples_mmg(t, t0_ns, dt_ns, k0)
         e, ed, edd = self.euler(t)
         w_b = euler_rates_to_body_rate(e, ed)
         wdot_b = euler_acc_to_body_acc(e, ed, edd)
@@ -189,5 +274,32 @@ class PaperShipMotion:
         a_b = np.einsum('nji,nj->ni', c_nb, a_n)
         lat, lon, hh = self.geodetic(t)
         p_w = self.plane.from_geodetic(lat, lon, hh)
+        return [ShipSample(t_ns=t0_ns + (k0 + i) * dt_ns, p_w=p_w[i], q_nb=q[i], v_b=v_b[i],
+                           w_b=w_b[i], a_b=a_b[i], wdot_b=wdot_b[i]) for i in range(len(t))]
+
+    def _samples_mmg(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int) -> list[ShipSample]:
+        """The paper's sinusoids about the MMG track: yaw and roll of the track added to the
+        sinusoids, position and velocity of the track plus heave."""
+        lf = self.track.kinematics(t)
+        e, ed, edd = self.euler(t)
+        e[:, 2] += heading_to_yaw(lf['psi']) - self.yaw0
+        ed[:, 2] -= lf['psi_dot']
+        edd[:, 2] -= lf['psi_ddot']
+        e[:, 0] += lf['phi']
+        ed[:, 0] += lf['phi_dot']
+        edd[:, 0] += lf['phi_ddot']
+        w_b = euler_rates_to_body_rate(e, ed)
+        wdot_b = euler_acc_to_body_acc(e, ed, edd)
+        rot = Rotation.from_euler('ZYX', e[:, ::-1])
+        q = rot.as_quat()
+        h, hd, hdd = self.heave(t)
+        v_n = lf['v_n'].copy()
+        a_n = lf['a_n'].copy()
+        v_n[:, 2] += hd
+        a_n[:, 2] += hdd
+        c_nb = rot.as_matrix()
+        v_b = np.einsum('nji,nj->ni', c_nb, v_n)
+        a_b = np.einsum('nji,nj->ni', c_nb, a_n)
+        p_w = self.plane.from_geodetic(lf['lat'], lf['lon'], h)
         return [ShipSample(t_ns=t0_ns + (k0 + i) * dt_ns, p_w=p_w[i], q_nb=q[i], v_b=v_b[i],
                            w_b=w_b[i], a_b=a_b[i], wdot_b=wdot_b[i]) for i in range(len(t))]

@@ -1,9 +1,13 @@
 """Spectral ship motion: low-frequency course plus wave-frequency response through RAOs.
 
-eta = eta_LF + eta_WF. The low-frequency part is, for now, a straight course at constant
-speed: a rhumb line on the WGS-84 ellipsoid (constant ENU velocity and yaw), integrated in
-closed form (meridian arc by Gauss-Legendre quadrature, inverted by Newton), so its
-position is the exact integral of its velocity.
+eta = eta_LF + eta_WF. The low-frequency part (`ShipConfig.course_keeping`) is either a
+straight course at constant speed ('straight'): a rhumb line on the WGS-84 ellipsoid
+(constant ENU velocity and yaw), integrated in closed form (meridian arc by Gauss-Legendre
+quadrature, inverted by Newton), so its position is the exact integral of its velocity; or
+the MMG manoeuvring model steered by an autopilot ('mmg', `course_keeping.ManoeuvringTrack`:
+heading, speed, roll and position of the track, with exact derivatives), along which the
+wave-frequency response follows `WaveFrequencyOnTrack` (below; the straight-course formulas
+of the next paragraphs are its special case).
 
 Wave frequency (no ODE): for each wave component (absolute frequency w, wave number k,
 travelling towards chi in ENU, amplitude A, phase eps) the ship meets the phase
@@ -27,11 +31,14 @@ product [cos(w_e m dt), -sin(w_e m dt)] (C x 2M, built once) @ [Re; Im](e^{i phi
 """
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import earth, rao, sea_state, wave_spectrum
 from .attitude import DEG, euler_acc_to_body_acc, euler_rates_to_body_rate, heading_to_yaw
+from .course_keeping import _poly, _quintic
 from .rng import stage_rng
 from .samples import ShipSample
 from .ship import KNOT, ShipConfig
@@ -136,9 +143,146 @@ class WaveFrequencyMotion:
         return out
 
 
+def _smoothstep(u, du, ddu):
+    """Quintic smoothstep S(u) = 10u^3 - 15u^4 + 6u^5 of u clipped to [0, 1] (C2), and the
+    first two time derivatives of S(u(t)) given u', u''."""
+    inside = (u > 0.0) & (u < 1.0)
+    uc = np.clip(u, 0.0, 1.0)
+    s = uc**3 * (10.0 - 15.0 * uc + 6.0 * uc * uc)
+    s1 = np.where(inside, 30.0 * uc**2 * (1.0 - uc) ** 2, 0.0)
+    s2 = np.where(inside, 60.0 * uc * (1.0 - uc) * (1.0 - 2.0 * uc), 0.0)
+    return s, s1 * du, s2 * du * du + s1 * ddu
+
+
+class WaveFrequencyOnTrack:
+    """Wave-frequency response of the six DOF along a manoeuvring track (course_keeping
+    'mmg'). Each component's phase is phi = w t - k . r_LF(t) + eps, the exact integral of
+    its encounter frequency along the track, so phi' = w - k . v_LF and phi'' = -k . a_LF.
+    The RAOs are evaluated at the initial course and speed and, when the schedule orders a
+    turn, also at the final ordered course and ordered speed; the response blends the two
+    with a C2 smoothstep of the heading's progress through the turn (1 - S) x_a + S x_b.
+    Between, the amplitudes are an interpolation (the RAO of the momentary heading is not
+    recomputed per sample); the encounter periods follow the track exactly. Derivatives are
+    analytic: x' and x'' include phi', phi'', S' and S''."""
+
+    CHUNK = 256
+    KNOT_S = 0.1              # knot spacing of the sampled response (s)
+    BLOCK = 256               # knots per cached block
+    CACHE = 64                # blocks kept
+
+    def __init__(self, comps: wave_spectrum.WaveComponents, rao_fn, courses, heading_span,
+                 scale: float = 1.0, heave: bool = True, track=None) -> None:
+        """courses: [(speed, ROS yaw)] one or two; heading_span: (psi0, psi1) MMG headings
+        (rad) over which the second set blends in (None: a single set); track: the
+        ManoeuvringTrack `evaluate` follows when not given its kinematics."""
+        self.comps, self.track = comps, track
+        self.kx = comps.k * np.cos(comps.chi)                 # East component
+        self.ky = comps.k * np.sin(comps.chi)                 # North component
+        sets = []
+        for speed, psi in courses:
+            beta = np.mod(psi - comps.chi, 2.0 * np.pi)
+            we = comps.omega - comps.k * speed * np.cos(beta)
+            h = np.asarray(rao_fn(comps.omega, beta, speed), dtype=complex)
+            h = np.where((we < 0.0)[:, None], np.conj(h), h)
+            if not heave:
+                h[:, 2] = 0.0
+            sets.append(h * (scale * comps.amp)[:, None])
+        self.n_sets = len(sets)
+        self.span = heading_span if self.n_sets > 1 else None
+        w = np.concatenate(sets + [(scale * comps.amp)[:, None].astype(complex)], axis=1)
+        self.n_cols = w.shape[1]
+        self._w_val = np.vstack([w.real, -w.imag])            # Re{Z W}
+        self._w_d1 = np.vstack([w.real, w.imag])              # -Im{Z W} = -(sin Wr + cos Wi)
+        self._blocks: OrderedDict[int, np.ndarray] = OrderedDict()
+
+    def _block(self, b: int) -> np.ndarray:
+        """Quintic coefficients (BLOCK, 19, 6) of the knots b*BLOCK .. (b+1)*BLOCK (cached;
+        each block is computed alone, so any order of evaluation gives the same numbers)."""
+        c = self._blocks.get(b)
+        if c is not None:
+            self._blocks.move_to_end(b)
+            return c
+        h = self.KNOT_S
+        tk = (b * self.BLOCK + np.arange(self.BLOCK + 1)) * h
+        x = self.evaluate(tk)
+        c = _quintic(x[:-1, 0:6], x[:-1, 6:12], x[:-1, 12:18], x[1:, 0:6], x[1:, 6:12],
+                     x[1:, 12:18], h)
+        elev = x[:, 18]
+        ce = np.zeros((self.BLOCK, 1, 6))
+        ce[:, 0, 0], ce[:, 0, 1] = elev[:-1], elev[1:] - elev[:-1]     # elevation: linear
+        c = np.concatenate([c, ce], axis=1)
+        self._blocks[b] = c
+        if len(self._blocks) > self.CACHE:
+            self._blocks.popitem(last=False)
+        return c
+
+    def at(self, t) -> np.ndarray:
+        """(N, 19) like `evaluate`, from the quintic Hermite interpolant of the response on
+        knots every KNOT_S seconds (value, rate and acceleration matched at the knots, so
+        the result is C2 and its rates are exactly the derivatives of its values; the
+        interpolation error is < 1e-4 of a component's amplitude up to 12 rad/s encounter
+        frequency). Times t >= 0."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        h = self.KNOT_S
+        j = np.maximum(np.floor(t / h).astype(np.int64), 0)
+        out = np.empty((len(t), 19))
+        blocks = j // self.BLOCK
+        for b in np.unique(blocks):
+            sel = blocks == b
+            c = self._block(int(b))[j[sel] - b * self.BLOCK]             # (n, 7, 6)
+            s = (t[sel] / h - j[sel])[:, None]
+            v, d1, d2 = _poly(c, s, h, 2)
+            out[sel, 0:6], out[sel, 6:12], out[sel, 12:18] = v[:, :6], d1[:, :6], d2[:, :6]
+            out[sel, 18] = v[:, 6]
+        return out
+
+    def evaluate(self, t, lf: dict[str, np.ndarray] | None = None) -> np.ndarray:
+        """(N, 19): x (6), x' (6), x'' (6) and the elevation at the ship, at times t along the
+        low-frequency kinematics `lf` (default: the track's kinematics at t)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if lf is None:
+            lf = self.track.kinematics(t)
+        n = len(t)
+        e, nn = lf['east'], lf['north']
+        ve, vn = lf['v_n'][:, 0], lf['v_n'][:, 1]
+        ae, an = lf['a_n'][:, 0], lf['a_n'][:, 1]
+        c = self.comps
+        val = np.empty((n, self.n_cols))
+        d1 = np.empty((n, self.n_cols))
+        d2 = np.empty((n, self.n_cols))
+        for a in range(0, n, self.CHUNK):
+            sl = slice(a, min(n, a + self.CHUNK))
+            ph = (np.outer(t[sl], c.omega) - np.outer(e[sl], self.kx) - np.outer(nn[sl], self.ky)
+                  + c.phase)
+            cs, sn = np.cos(ph), np.sin(ph)
+            pd = c.omega - np.outer(ve[sl], self.kx) - np.outer(vn[sl], self.ky)
+            pdd = -(np.outer(ae[sl], self.kx) + np.outer(an[sl], self.ky))
+            val[sl] = np.hstack([cs, sn]) @ self._w_val
+            d1[sl] = -(np.hstack([sn * pd, cs * pd]) @ self._w_d1)
+            pd2 = pd * pd
+            d2[sl] = np.hstack([-cs * pd2 - sn * pdd, cs * pdd - sn * pd2]) @ self._w_val
+        out = np.empty((n, 19))
+        out[:, 18] = val[:, -1]
+        if self.n_sets == 1:
+            out[:, 0:6], out[:, 6:12], out[:, 12:18] = val[:, :6], d1[:, :6], d2[:, :6]
+            return out
+        p0, p1 = self.span
+        u = (lf['psi'] - p0) / (p1 - p0)
+        s, s1, s2 = _smoothstep(u, lf['psi_dot'] / (p1 - p0), lf['psi_ddot'] / (p1 - p0))
+        s, s1, s2 = s[:, None], s1[:, None], s2[:, None]
+        xa, xb = val[:, 0:6], val[:, 6:12]
+        va, vb = d1[:, 0:6], d1[:, 6:12]
+        out[:, 0:6] = (1.0 - s) * xa + s * xb
+        out[:, 6:12] = (1.0 - s) * va + s * vb + s1 * (xb - xa)
+        out[:, 12:18] = ((1.0 - s) * d2[:, 0:6] + s * d2[:, 6:12] + 2.0 * s1 * (vb - va)
+                         + s2 * (xb - xa))
+        return out
+
+
 class SpectralShipMotion:
-    """Ship truth for `mode: spectral`: a straight course at constant speed plus the
-    wave-frequency response of all six DOF to a random sea (see the module docstring)."""
+    """Ship truth for `mode: spectral`: a straight course at constant speed, or the MMG
+    track, plus the wave-frequency response of all six DOF to a random sea (see the module
+    docstring)."""
 
     def __init__(self, cfg: ShipConfig, seed: int, rao_fn=None,
                  comps: wave_spectrum.WaveComponents | None = None) -> None:
@@ -162,13 +306,28 @@ class SpectralShipMotion:
             rao_fn = rao.make(cfg.rao_source, rao.CarrierParams(roll_period_s=cfg.roll_period_s,
                                                                 roll_zeta=cfg.roll_zeta))
         self.rao = rao_fn
-        self.wf = WaveFrequencyMotion(comps, rao_fn, self.lf.speed, self.lf.yaw,
-                                      scale=cfg.motion_scale, heave=cfg.heave)
+        self.track = None
+        if cfg.course_keeping == 'mmg':
+            from .ship import make_track
+            self.track = make_track(cfg)
+            sched = self.track.sched
+            courses = [(sched.speed0, heading_to_yaw(sched.heading0))]
+            span = None
+            if sched.turning and abs(sched.final_heading - sched.heading0) > 1e-9:
+                courses.append((sched.speed(sched.turn_at), heading_to_yaw(sched.final_heading)))
+                span = (sched.heading0, sched.final_heading)
+            self.wf = WaveFrequencyOnTrack(comps, rao_fn, courses, span, scale=cfg.motion_scale,
+                                           heave=cfg.heave, track=self.track)
+        else:
+            self.wf = WaveFrequencyMotion(comps, rao_fn, self.lf.speed, self.lf.yaw,
+                                          scale=cfg.motion_scale, heave=cfg.heave)
 
     def batch(self, t) -> dict[str, np.ndarray]:
         """Truth arrays at times t (s since start): euler, euler_dot, euler_ddot (N, 3) ROS,
         p_w, q_nb, v_n, a_n, v_b, a_b, w_b, wdot_b, and the wave-frequency DOF `wf` (N, 19)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
+        if self.track is not None:
+            return self._batch_track(t)
         x = self.wf.evaluate(t)
         n = len(t)
         psi = self.lf.yaw
@@ -194,6 +353,55 @@ class SpectralShipMotion:
                 'v_b': np.einsum('nji,nj->ni', c_nb, v_n), 'a_b': np.einsum('nji,nj->ni', c_nb, a_n),
                 'w_b': euler_rates_to_body_rate(e, ed), 'wdot_b': euler_acc_to_body_acc(e, ed, edd),
                 'lat': lat_w, 'lon': lon_w, 'wf': x}
+
+    def _batch_track(self, t: np.ndarray) -> dict[str, np.ndarray]:
+        """`batch` for course_keeping 'mmg': the wave-frequency DOF in the axes of the track's
+        heading psi(t) (ROS yaw), so the ENU displacement d = R(psi) x has the velocity
+        R x' + psi' R J x and the acceleration R x'' + 2 psi' R J x' + psi'' R J x - psi'^2 R x
+        (J: +90 deg rotation); roll of the track added to the wave roll."""
+        lf = self.track.kinematics(t)
+        x = self.wf.at(t)
+        n = len(t)
+        psi = heading_to_yaw(lf['psi'])
+        pd, pdd = -lf['psi_dot'], -lf['psi_ddot']
+        e = np.empty((n, 3))
+        e[:, 0], e[:, 1], e[:, 2] = x[:, 3] + lf['phi'], x[:, 4], psi + x[:, 5]
+        ed = x[:, 9:12].copy()
+        edd = x[:, 15:18].copy()
+        ed[:, 0] += lf['phi_dot']
+        edd[:, 0] += lf['phi_ddot']
+        ed[:, 2] += pd
+        edd[:, 2] += pdd
+        cp, sp = np.cos(psi), np.sin(psi)
+
+        def rot(a):                                # R(psi) a, horizontal components
+            return cp * a[:, 0] - sp * a[:, 1], sp * a[:, 0] + cp * a[:, 1]
+
+        def rot_j(a):                              # R(psi) J a
+            return -sp * a[:, 0] - cp * a[:, 1], cp * a[:, 0] - sp * a[:, 1]
+        d0, d1, d2 = x[:, 0:3], x[:, 6:9], x[:, 12:15]
+        de, dn = rot(d0)
+        v_n = lf['v_n'].copy()
+        a_n = lf['a_n'].copy()
+        r1, rj0 = rot(d1), rot_j(d0)
+        r2, rj1 = rot(d2), rot_j(d1)
+        for i in range(2):
+            v_n[:, i] += r1[i] + pd * rj0[i]
+            a_n[:, i] += r2[i] + 2.0 * pd * rj1[i] + pdd * rj0[i] - pd * pd * (de, dn)[i]
+        v_n[:, 2] += d1[:, 2]
+        a_n[:, 2] += d2[:, 2]
+        lat, lon = lf['lat'], lf['lon']
+        r_m, r_n = earth.radii(lat)
+        lat_w = lat + dn / r_m
+        lon_w = lon + de / (r_n * np.cos(lat))
+        p_w = self.plane.from_geodetic(lat_w, lon_w, d0[:, 2])
+        rot_nb = Rotation.from_euler('ZYX', e[:, ::-1])
+        c_nb = rot_nb.as_matrix()
+        return {'t': t, 'euler': e, 'euler_dot': ed, 'euler_ddot': edd, 'p_w': p_w,
+                'q_nb': rot_nb.as_quat(), 'v_n': v_n, 'a_n': a_n,
+                'v_b': np.einsum('nji,nj->ni', c_nb, v_n), 'a_b': np.einsum('nji,nj->ni', c_nb, a_n),
+                'w_b': euler_rates_to_body_rate(e, ed), 'wdot_b': euler_acc_to_body_acc(e, ed, edd),
+                'lat': lat_w, 'lon': lon_w, 'wf': x, 'lf': lf}
 
     def samples(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int = 0) -> list[ShipSample]:
         """Ship samples k0 .. k0+len(t)-1 at times t (s since start); stamps t0_ns + k*dt_ns."""

@@ -1,0 +1,165 @@
+"""MMG manoeuvring model (Yasukawa & Yoshimura 2015, "Y&Y"): calm-water equilibrium,
+the KVLCC2 trials, port/starboard symmetry, steady turn, autopilot course keeping."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import fsolve
+
+from alignment_core.autopilot import Autopilot, CourseSchedule, SteeringGear, ZigZag
+from alignment_core.course_keeping import ManoeuvringTrack
+from alignment_core.mmg import CARRIER, KVLCC2, KVLCC2_MODEL, MmgModel, rk4_step
+
+U0_MODEL = 1.179          # Y&Y: approach speed of the 7 m KVLCC2 model (Fn 0.142), m/s
+
+
+def run(ship, command, t_end, h, u0, revs=None, y0=None, gain=5.0):
+    """Open-loop manoeuvre: rudder order command(t, y) at each step start, the steering gear
+    at the ship's rate; constant propeller revs (equilibrium of u0 unless given)."""
+    m = MmgModel(ship)
+    n = m.equilibrium_revs(u0) if revs is None else revs
+    gear = SteeringGear(math.radians(ship.rudder_max_deg), math.radians(ship.rudder_rate_dps), gain)
+    y = list(y0) if y0 is not None else [0.0, 0.0, 0.0, u0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    out = [y]
+    for k in range(int(round(t_end / h))):
+        dc = command(k * h, y)
+        y, _ = rk4_step(lambda t, s, dc=dc: m.rhs(s, s[8], n) + [gear.rate_of(s[8], dc)], k * h, y, h)
+        out.append(y)
+    return np.arange(len(out)) * h, np.array(out)
+
+
+def turning_indices(ship, delta_deg, u0, h):
+    """Advance and tactical diameter (/L) of a turning trial: the forward (original course)
+    and lateral displacement of midship when the heading has changed by 90 and 180 deg."""
+    t, y = run(ship, lambda t, s: math.radians(delta_deg), 40.0 * ship.lpp / u0, h, u0)
+    psi = y[:, 2] * math.copysign(1.0, delta_deg)
+    i90, i180 = np.argmax(psi >= math.pi / 2), np.argmax(psi >= math.pi)
+    adv = np.interp(math.pi / 2, psi[i90 - 1:i90 + 1], y[i90 - 1:i90 + 1, 0])
+    tac = np.interp(math.pi, psi[i180 - 1:i180 + 1], y[i180 - 1:i180 + 1, 1])
+    return adv / ship.lpp, abs(tac) / ship.lpp, t, y
+
+
+def zigzag_overshoots(ship, angle_deg, u0, h):
+    """First and second overshoot angles (deg) of an angle/angle zig-zag, starboard first."""
+    zz = ZigZag(math.radians(angle_deg), math.radians(angle_deg), 0.0)
+    _, y = run(ship, lambda t, s: zz(s[2]), 30.0 * ship.lpp / u0, h, u0)
+    psi = np.degrees(y[:, 2])
+    k = int(np.argmax(psi >= angle_deg))
+    while psi[k + 1] >= psi[k]:
+        k += 1
+    j = k + int(np.argmax(psi[k:] <= -angle_deg))
+    while psi[j + 1] <= psi[j]:
+        j += 1
+    return psi[k] - angle_deg, -psi[j] - angle_deg
+
+
+def test_calm_water_holds_course_and_the_closed_form_equilibrium_speed():
+    """Rudder 0 from a straight start at 60 % speed: no sway or yaw at all, and the speed
+    settles where Y&Y's surge equation balances at v = r = 0 (X_R = 0 at delta = 0):
+      (1 - t_P) rho n^2 D^4 (k0 + k1 J + k2 J^2) = 1/2 rho L d R'_0 u^2,  J = (1 - w_P0) u/(n D),
+    i.e. [k2 a^2 - c] u^2 + k1 a n D u + k0 n^2 D^2 = 0 with a = 1 - w_P0 and
+    c = L d R'_0 / (2 (1 - t_P) D^2): the positive root, for a fixed n = 10 rps (model)."""
+    s = KVLCC2_MODEL
+    n, a = 10.0, 1.0 - s.w_p0
+    c = s.lpp * s.draft * s.r0 / (2.0 * (1.0 - s.t_p) * s.d_p**2)
+    qa, qb, qc = s.k2 * a * a - c, s.k1 * a * n * s.d_p, s.k0 * n * n * s.d_p**2
+    u_eq = (-qb - math.sqrt(qb * qb - 4.0 * qa * qc)) / (2.0 * qa)
+    y0 = [0.0, 0.0, 0.0, 0.6 * u_eq, 0.0, 0.0, 0.0, 0.0, 0.0]
+    t, y = run(s, lambda t, st: 0.0, 1200.0, 0.2, u_eq, revs=n, y0=y0)
+    assert np.max(np.abs(y[:, [1, 2, 4, 5, 6, 7, 8]])) == 0.0      # east, psi, v, r, phi, p, delta
+    assert y[-1, 3] == pytest.approx(u_eq, rel=1e-9)
+    # and MmgModel.equilibrium_revs inverts it
+    assert MmgModel(s).equilibrium_revs(u_eq) == pytest.approx(n, rel=1e-12)
+
+
+# Y&Y (2015) simulated the 7 m KVLCC2 model (their Tables 1-3) at 1.179 m/s with the rudder
+# at 15.8 deg/s and compared the trials with free-running tests in figures. We could not read
+# their simulated turning indices or overshoot angles in this environment (no copy of the
+# paper's figures or tables was retrievable): fill these from the paper to enable the checks.
+# Our model gives (h = 0.05 s): 35 deg starboard advance 3.08 L, tactical diameter 3.12 L;
+# port 3.09 L / 3.11 L; 10/10 zig-zag overshoots 5.0 / 13.8 deg; 20/20 10.6 / 15.7 deg.
+YY2015_TURNING_35_STBD = None      # (advance / L, tactical diameter / L), Y&Y 2015 Fig. (turning)
+YY2015_ZIGZAG_10_10 = None         # (first, second overshoot, deg), Y&Y 2015 Fig. (10/10 zig-zag)
+
+
+@pytest.mark.skipif(YY2015_TURNING_35_STBD is None,
+                    reason="Y&Y (2015) simulated turning indices not available offline; see the note")
+def test_kvlcc2_turning_circle_matches_yasukawa_yoshimura():
+    adv, tac, _, _ = turning_indices(KVLCC2_MODEL, 35.0, U0_MODEL, 0.05)
+    assert adv == pytest.approx(YY2015_TURNING_35_STBD[0], rel=0.05)
+    assert tac == pytest.approx(YY2015_TURNING_35_STBD[1], rel=0.05)
+
+
+@pytest.mark.skipif(YY2015_ZIGZAG_10_10 is None,
+                    reason="Y&Y (2015) simulated overshoot angles not available offline; see the note")
+def test_kvlcc2_zigzag_10_10_matches_yasukawa_yoshimura():
+    os1, os2 = zigzag_overshoots(KVLCC2_MODEL, 10.0, U0_MODEL, 0.05)
+    assert os1 == pytest.approx(YY2015_ZIGZAG_10_10[0], rel=0.05)
+    assert os2 == pytest.approx(YY2015_ZIGZAG_10_10[1], rel=0.05)
+
+
+def test_full_scale_kvlcc2_repeats_the_model_trials():
+    """Froude similarity: with every primed coefficient the same, the full-scale ship (Y&Y
+    Table 1, rudder rate scaled by 1/sqrt(45.7)) turns on the same circle in ship lengths
+    as the 7 m model (the particulars differ by their rounding, < 1 %)."""
+    m_adv, m_tac, _, _ = turning_indices(KVLCC2_MODEL, 35.0, U0_MODEL, 0.05)
+    f_adv, f_tac, _, _ = turning_indices(KVLCC2, 35.0, U0_MODEL * math.sqrt(320.0 / 7.0), 0.4)
+    assert f_adv == pytest.approx(m_adv, rel=0.01)
+    assert f_tac == pytest.approx(m_tac, rel=0.01)
+
+
+@pytest.mark.parametrize('ship', [CARRIER, dataclasses.replace(KVLCC2_MODEL, c2_minus=1.6,
+                                                                 gamma_r_minus=0.640)],
+                         ids=['carrier', 'kvlcc2-symmetric'])
+def test_turning_circle_port_and_starboard_are_mirror_images(ship):
+    """A ship whose coefficients are the same both ways (the carrier's twin screws; KVLCC2
+    with Y&Y's starboard C2 and gamma_R on both sides) turns to port on the mirror image of
+    its starboard circle: east, heading, sway, yaw rate and roll change sign, the rest not."""
+    u0 = 15.0 * 0.514444 if ship is CARRIER else U0_MODEL
+    h = 0.5 if ship is CARRIER else 0.05
+    a1, t1, _, ys = turning_indices(ship, 35.0, u0, h)
+    a2, t2, _, yp = turning_indices(ship, -35.0, u0, h)
+    mirror = np.array([1, -1, -1, 1, -1, -1, -1, -1, -1])
+    np.testing.assert_allclose(yp, ys * mirror, rtol=1e-9, atol=1e-9 * ship.lpp)
+    assert (a1, t1) == pytest.approx((a2, t2), rel=1e-9)
+
+
+def test_steady_turn_matches_the_algebraic_force_balance():
+    """After the transient, the 35 deg turn is a circle whose speed and yaw rate solve the
+    steady equations (u' = v' = r' = 0 of the model's force balance, solved by fsolve):
+    diameter 2 U / r. Checks the integration and the track kinematics, not the forces."""
+    ship = KVLCC2_MODEL
+    m = MmgModel(ship)
+    n = m.equilibrium_revs(U0_MODEL)
+    delta = math.radians(35.0)
+
+    def resid(x):
+        d = m.rhs([0.0, 0.0, 0.0, x[0], x[1], x[2], 0.0, 0.0], delta, n)
+        return [d[3] * 10.0, d[4] * 10.0, d[5] * 100.0]
+    u, v, r = fsolve(resid, [0.5 * U0_MODEL, -0.1 * U0_MODEL, 0.1], xtol=1e-13)
+    diameter = 2.0 * math.hypot(u, v) / r
+    _, _, t, y = turning_indices(ship, 35.0, U0_MODEL, 0.05)
+    late = t > t[-1] - 2.0 * math.pi / r                         # the last full circle
+    north, east = y[late, 0], y[late, 1]
+    # circle through the last positions: diameter from the extent of the track
+    assert (np.ptp(north) + np.ptp(east)) / 2.0 == pytest.approx(diameter, rel=2e-3)
+    assert y[-1, 5] == pytest.approx(r, rel=1e-5)
+
+
+def test_autopilot_holds_and_changes_course():
+    """The carrier holds its course in a beam wind (heading within 0.01 deg after 20 min,
+    the integral trims the wind's yaw moment) and turns 90 deg on order, settling within
+    0.5 deg of the new course 10 min after the order."""
+    from alignment_core.mmg import Wind
+    model = MmgModel(CARRIER, Wind(20.0, math.radians(120.0)))
+    rmax = math.radians(35.0)
+    ap = Autopilot(2.0, 0.01, 60.0, rmax)
+    gear = SteeringGear(rmax, math.radians(2.5), 2.0)
+    sched = CourseSchedule(math.radians(30.0), 20 * 0.514444, 1200.0, math.radians(120.0))
+    tr = ManoeuvringTrack(model, ap, gear, sched, math.radians(40.0), math.radians(116.0), 0.5)
+    k = tr.kinematics(np.array([1200.0, 1800.0]))
+    assert math.degrees(k['psi'][0]) == pytest.approx(30.0, abs=0.01)
+    assert math.degrees(k['psi'][1]) == pytest.approx(120.0, abs=0.5)
