@@ -108,7 +108,11 @@ class _DelayedFading(KalmanFilter):
     def diagnostics(self) -> dict:
         d = super().diagnostics()
         lam = self.last_fading
-        d['fading'] = lam.copy() if isinstance(lam, np.ndarray) else lam
+        if isinstance(lam, np.ndarray):
+            lam = lam.copy()
+        elif getattr(self, 'alpha', None) is not None:    # multiple factors: always one per state
+            lam = np.full(self.x.shape, lam, dtype=self.dtype)
+        d['fading'] = lam
         d['nis_faded'] = self.last_nis_faded
         return d
 

@@ -23,9 +23,13 @@ Measurement z = (V_SINS - V_D)_(E,N). With C_est = (I - [phi x]) C, to first ord
     z = dV + (phi x V)_h - dC V_h - eps_D (e_U x V)_h - dVd u_h + v
     H_E = [0, V_U, -V_N | 1, 0 | 0, 0 | 0 0 0 | -u_E,  V_N, -V_E]
     H_N = [-V_U, 0, V_E | 0, 1 | 0, 0 | 0 0 0 | -u_N, -V_E, -V_N]
-phi_U and eps_D enter with opposite columns: in straight flight only phi_U - eps_D is seen
-(and only dC |V| + dVd along the track); a turn makes phi_U observable through f^n x phi
-(centripetal specific force), which then separates eps_D.
+Observability (tested): the radar's velocity is resolved with the SINS's own attitude, so
+rotating the SINS's attitude and velocity together about the vertical (phi_U = psi,
+dV = psi V x e_U) leaves z unchanged (H x = 0) and the SINS's kinematics too (gravity is
+vertical): heading is seen only through gyrocompassing (Earth rate), turn or not -- unless the
+SINS velocity is known at the start (a tight dV prior), which the paper seems to assume. The
+drift-angle error rotates the radar velocity alone: in straight flight it is confounded with
+the cross-track velocity error (and dC |V| with dVd along the track); a turn separates it.
 
 Discretisation as models/base.py (second-order Phi, Qd = diag(arw^2 h, vrw^2 h) on phi, dV).
 
