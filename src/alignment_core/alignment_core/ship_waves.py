@@ -191,8 +191,8 @@ class WaveFrequencyOnTrack:
         self.span = heading_span if self.n_sets > 1 else None
         w = np.concatenate(sets + [(scale * comps.amp)[:, None].astype(complex)], axis=1)
         self.n_cols = w.shape[1]
-        self._w_val = np.vstack([w.real, -w.imag])            # Re{Z W}
-        self._w_d1 = np.vstack([w.real, w.imag])              # -Im{Z W} = -(sin Wr + cos Wi)
+        self._wr, self._wi = np.ascontiguousarray(w.real), np.ascontiguousarray(w.imag)
+        self._k2 = np.vstack([self.kx, self.ky])              # (2, M): k . (east, north)
         self._blocks: OrderedDict[int, np.ndarray] = OrderedDict()
 
     def _block(self, b: int) -> np.ndarray:
@@ -247,20 +247,28 @@ class WaveFrequencyOnTrack:
         ve, vn = lf['v_n'][:, 0], lf['v_n'][:, 1]
         ae, an = lf['a_n'][:, 0], lf['a_n'][:, 1]
         c = self.comps
+        kk = self._k2
+        pos = np.stack([e, nn], axis=1)
+        vel = np.stack([ve, vn], axis=1)
+        acc = np.stack([ae, an], axis=1)
+        wr, wi = self._wr, self._wi
         val = np.empty((n, self.n_cols))
         d1 = np.empty((n, self.n_cols))
         d2 = np.empty((n, self.n_cols))
         for a in range(0, n, self.CHUNK):
             sl = slice(a, min(n, a + self.CHUNK))
-            ph = (np.outer(t[sl], c.omega) - np.outer(e[sl], self.kx) - np.outer(nn[sl], self.ky)
-                  + c.phase)
+            ph = np.outer(t[sl], c.omega) - pos[sl] @ kk
+            ph += c.phase
             cs, sn = np.cos(ph), np.sin(ph)
-            pd = c.omega - np.outer(ve[sl], self.kx) - np.outer(vn[sl], self.ky)
-            pdd = -(np.outer(ae[sl], self.kx) + np.outer(an[sl], self.ky))
-            val[sl] = np.hstack([cs, sn]) @ self._w_val
-            d1[sl] = -(np.hstack([sn * pd, cs * pd]) @ self._w_d1)
-            pd2 = pd * pd
-            d2[sl] = np.hstack([-cs * pd2 - sn * pdd, cs * pdd - sn * pd2]) @ self._w_val
+            pd = c.omega - vel[sl] @ kk                      # phi'
+            pdd = acc[sl] @ kk                               # -phi''
+            val[sl] = cs @ wr - sn @ wi                      # Re{Z W}
+            spd, cpd = sn * pd, cs * pd
+            d1[sl] = -(spd @ wr + cpd @ wi)                  # Re{i phi' Z W}
+            # Re{(i phi'' - phi'^2) Z W}: G = Z (i phi'' - phi'^2)
+            gr = sn * pdd - cpd * pd                         # Re G
+            gi = -(cs * pdd + spd * pd)                      # Im G
+            d2[sl] = gr @ wr - gi @ wi
         out = np.empty((n, 19))
         out[:, 18] = val[:, -1]
         if self.n_sets == 1:
