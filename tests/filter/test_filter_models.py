@@ -11,7 +11,8 @@ import pytest
 from alignment_core import pipeline, scenario
 from alignment_core.attitude import ARCMIN
 from alignment_core.config import ConfigError
-from alignment_core.models import ENGINE_MODELS, MODELS
+from alignment_core.doppler_radar import DopplerRadarModel
+from alignment_core.models import MODELS
 from alignment_core.transfer_alignment import FilterConfig, TransferAlignment
 
 SHORT = {'duration_s': 3.0, 'aircraft.catapult.enabled': False}
@@ -29,10 +30,11 @@ def test_model_names_are_the_config_choices():
     assert set(typing.get_args(typing.get_type_hints(FilterConfig)['model'])) == set(MODELS)
 
 
-@pytest.mark.parametrize('model', ENGINE_MODELS)
-def test_every_engine_model_runs_and_labels_its_state(model):
+@pytest.mark.parametrize('model', MODELS)
+def test_every_model_runs_in_the_engine_and_labels_its_state(model):
     algorithm = 'ekf' if model == 'seed000_large_angle' else 'kf'
-    sc = scenario.load('deck', {**SHORT, 'filter.model': model, 'filter.algorithm': algorithm})
+    sc = scenario.load('deck', {**SHORT, 'filter.model': model, 'filter.algorithm': algorithm,
+                                'doppler.enabled': model == 'seed001_13'})
     res = pipeline.run(sc, keep_truth=False)
     n = res.filter.n
     assert len(res.filter.labels) == n == len(set(res.filter.labels))
@@ -51,7 +53,8 @@ def test_every_engine_model_runs_and_labels_its_state(model):
      'lever_arm_treatment compensation'),
     ({'filter.model': 'seed000_large_angle', 'filter.algorithm': 'ckf', 'filter.lever_arm_states': True},
      'lever_arm_states is not available'),
-    ({'filter.model': 'seed001_13'}, 'Doppler radar input'),
+    ({'filter.model': 'seed001_13'}, 'doppler.enabled'),
+    ({'filter.model': 'seed001_13', 'doppler.enabled': True, 'filter.lever_arm_states': True}, 'Doppler rows'),
     ({'filter.model': 'seed004'}, 'model'),
     ({'filter.lever_arm_treatment': 'magic'}, 'lever_arm_treatment'),
     ({'filter.flexure_tau_s': [3.0, 0.0, 3.0]}, 'flexure'),
@@ -61,6 +64,29 @@ def test_invalid_combinations_are_refused_with_a_message(overrides, message):
     with pytest.raises(ConfigError, match=message) as err:
         scenario.load('catapult', overrides)
     assert 'filter' in str(err.value)
+
+
+SEED001_FLIGHT = ('climb duration_s=20 climb_rate_mps=5 speed_mps=60; level duration_s=10; '
+                  'turn duration_s=60 bank_deg=30')
+
+
+@pytest.mark.parametrize('seed', [1, 2, 3])
+def test_seed001_doppler_matching_in_flight_estimates_the_radar_errors(seed):
+    """inflight scenario (10 s on deck with LDV matching, launch, 20 s climb and 10 s level at
+    60 m/s), seed001_13 with the Doppler radar: after the release the Doppler keeps matching,
+    and by the end of the level segment (before any turn) the radar's speed offset, scale factor
+    (separated by the speed change from the deck's 5 m/s to 60 m/s) and track-angle error (its
+    azimuth boresight plus drift-angle error: they act alike in level flight) are within 3 sigma
+    of the radar's true errors."""
+    sc = scenario.load('inflight', {'duration_s': 45.0, 'doppler.enabled': True, 'filter.model': 'seed001_13',
+                                    'aircraft.flight.segments': SEED001_FLIGHT}, seed=seed)
+    res = pipeline.run(sc, keep_truth=False)
+    e = res.estimates[-1]
+    assert e.matching and res.filter.counters.doppler_updates == 450       # 45 s at 10 Hz
+    radar = DopplerRadarModel(sc.doppler, seed)
+    truth = np.array([radar.bias, radar.azimuth + radar.drift, radar.scale])
+    assert res.filter.labels[10:13] == ('dVd', 'eps_D', 'dC')
+    assert np.all(np.abs(e.x[10:13] - truth) < 3.0 * e.sigma[10:13]), (e.x[10:13], truth, e.sigma[10:13])
 
 
 def test_butterworth_cutoff_above_nyquist_is_refused_by_the_engine():

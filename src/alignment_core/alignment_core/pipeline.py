@@ -115,7 +115,8 @@ def simulate(sc: Scenario) -> Inputs:
 def align(sc: Scenario, inp: Inputs) -> TransferAlignment:
     """Feed the inputs to a fresh filter in the order the graph's nodes publish them."""
     filt = TransferAlignment(sc.filter, plane_of(sc), sc.rate_hz)
-    j_ldv = j_master = 0        # sensor streams with their own rate / latency: pushed by stamp
+    j_ldv = j_master = j_dop = 0        # sensor streams with their own rate / latency: pushed by stamp
+    doppler = inp.doppler or []
     for k in range(len(inp.ships)):
         t = int(inp.ships.t_ns[k])
         if k > 0:
@@ -123,6 +124,9 @@ def align(sc: Scenario, inp: Inputs) -> TransferAlignment:
         while j_ldv < len(inp.ldv) and inp.ldv[j_ldv].t_ns <= t:
             filt.push_ldv(inp.ldv[j_ldv])
             j_ldv += 1
+        while j_dop < len(doppler) and doppler[j_dop].t_ns <= t:
+            filt.push_doppler(doppler[j_dop])
+            j_dop += 1
         while j_master < len(inp.master) and inp.master[j_master].t_ns <= t:
             filt.push_master(inp.master[j_master])
             j_master += 1

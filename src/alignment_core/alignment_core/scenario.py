@@ -53,6 +53,8 @@ class Scenario:
         check_rate('ldv.rate_hz', self.ldv.rate_hz, self.rate_hz)
         if self.doppler.enabled:
             check_rate('doppler.rate_hz', self.doppler.rate_hz, self.rate_hz)
+        require(self.doppler.enabled or self.filter.model != 'seed001_13',
+                "filter.model seed001_13 matches the Doppler radar: set doppler.enabled true")
 
     @property
     def dt_ns(self) -> int:

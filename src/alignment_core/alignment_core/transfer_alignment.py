@@ -27,11 +27,15 @@ Algorithms x models (config validation rejects the other combinations with a mes
     seed002_10             x  x      x          x         x          x     x     x     |  x   x   x  | linear algs
     seed003_21, _24        x  x      x          x         x          x     x     x     |  x   x   x  | linear algs
     seed000_large_angle    -  -      -          -         -          -     -     -     |  x   x   x  | no
-    seed001_13             (library only: no Doppler input in the engine yet)
+    seed001_13             x  x      x          x         x          x     x     x     |  x   x   x  | linear algs
 
 On a linear model EKF = KF and UKF/CKF compute the KF's result (their linear predict/update are
 exact). ekf/ukf/ckf run in float64 only. `lever_arm_states` needs `lever_arm_treatment:
-compensation` (the states are the error of the compensated arm) and a linear model.
+compensation` (the states are the error of the compensated arm) and a linear model other
+than seed001_13; seed001_13 needs `doppler.enabled` (checked by the scenario).
+
+Doppler (seed001_13): a fourth input stream, /doppler/twist, ordered before the master at
+equal stamps; each valid sample stamped at an IMU instant is matched (models/seed001.py).
 """
 from __future__ import annotations
 
@@ -45,6 +49,7 @@ from scipy.spatial.transform import Rotation
 from . import earth
 from .attitude import DEG, cross3
 from .config import ConfigError, require
+from .doppler_radar import DopplerSample
 from .filters import (
     CarlsonFilter,
     CubatureKalmanFilter,
@@ -57,12 +62,13 @@ from .filters import (
     UnscentedKalmanFilter,
 )
 from .filters.lowpass import ButterworthLowPass
-from .models import ENGINE_MODELS, NONLINEAR_MODELS, Corrections, Match, Propagation, make_model
+from .models import DOPPLER_MODELS, NONLINEAR_MODELS, Corrections, Match, Propagation, make_model
 from .samples import ImuSample, LdvSample, MasterSample
 from .strapdown import NavState, Strapdown, quat_to_dcm
 from .sync import StampMerger
 
 STREAMS = ('imu', 'ldv', 'master')
+DOPPLER_STREAMS = ('imu', 'ldv', 'doppler', 'master')   # seed001_13: the Doppler radar too
 LINEAR_ALGORITHMS = ('kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud', 'combined')
 NONLINEAR_ALGORITHMS = ('ekf', 'ukf', 'ckf')
 
@@ -105,6 +111,9 @@ class FilterConfig:
     flexure_tau_s: tuple[float, float, float] = (3.0, 3.0, 3.0)
     attitude_match_sigma_arcmin: float = 0.1  # seed003: white noise of the attitude match
     large_angle_feedback_deg: float = 1.0     # seed000_large_angle: feed phi back below this sigma
+    doppler_scale_sigma_ppm: float = 1000.0   # seed001_13: priors of the radar's errors
+    doppler_bias_sigma_mps: float = 0.05
+    doppler_drift_sigma_arcmin: float = 5.0
     output_rate_hz: float = 10.0
     gate_chi2: float = 0.0
     max_gap_factor: float = 1.5
@@ -124,7 +133,8 @@ class FilterConfig:
         require(self.fading_factor >= 1.0, f"fading_factor must be >= 1, got {self.fading_factor}")
         require(self.fading_gamma >= 1.0, f"fading_gamma must be >= 1, got {self.fading_gamma}")
         for k in ('butterworth_cutoff_hz', 'lever_arm_sigma_m', 'mounting_sigma_deg', 'attitude_match_sigma_arcmin',
-                  'large_angle_feedback_deg'):
+                  'large_angle_feedback_deg', 'doppler_scale_sigma_ppm', 'doppler_bias_sigma_mps',
+                  'doppler_drift_sigma_arcmin'):
             require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
         require(self.init_yaw_sigma_deg >= 0.0, f"init_yaw_sigma_deg must be >= 0, got {self.init_yaw_sigma_deg}")
         require(all(v > 0.0 for v in self.flexure_sigma_arcmin + self.flexure_tau_s),
@@ -135,9 +145,8 @@ class FilterConfig:
     def validate_combination(self) -> None:
         """Model x algorithm x options (the matrix in the module docstring)."""
         m, a = self.model, self.algorithm
-        require(m in ENGINE_MODELS,
-                f"model {m} needs a Doppler radar input (/doppler/twist) that the alignment engine does not "
-                f"take yet; models the engine runs: {', '.join(ENGINE_MODELS)}")
+        require(not (self.lever_arm_states and m in DOPPLER_MODELS),
+                f"lever_arm_states is not available with {m} (its Doppler rows have no lever arm)")
         if m in NONLINEAR_MODELS:
             require(a in NONLINEAR_ALGORITHMS,
                     f"model {m} is nonlinear: algorithm must be one of {', '.join(NONLINEAR_ALGORITHMS)}, got {a}")
@@ -178,6 +187,8 @@ class Counters:
     updates: int = 0
     gated: int = 0
     skipped_before_init: int = 0
+    doppler: int = 0
+    doppler_updates: int = 0
     extra: dict = field(default_factory=dict)
 
 
@@ -229,12 +240,13 @@ class TransferAlignment:
     def __init__(self, cfg: FilterConfig, plane: earth.TangentPlane, imu_rate_hz: float) -> None:
         self.cfg = cfg
         self.plane = plane
-        self.merger = StampMerger(STREAMS)
+        self.model = make_model(cfg)
+        self.streams = DOPPLER_STREAMS if self.model.uses_doppler else STREAMS
+        self.merger = StampMerger(self.streams)
         self.counters = Counters()
         self.imu_dt_nominal = 1.0 / imu_rate_hz
         self.out_period_ns = int(round(1e9 / cfg.output_rate_hz))
         self.r0 = np.asarray(cfg.lever_arm_m, dtype=float)
-        self.model = make_model(cfg)
         self.n = self.model.n
         self.labels = self.model.labels
         self.compensate = cfg.lever_arm_treatment == 'compensation'
@@ -259,6 +271,7 @@ class TransferAlignment:
         self.last_x = np.zeros(self.n)
         self.last_nis = math.nan
         self.matching = False
+        self.t_doppler_update: int | None = None
         self.outputs: list[Estimate] = []
 
     @property
@@ -280,6 +293,12 @@ class TransferAlignment:
 
     def push_master(self, s: MasterSample) -> bool:
         return self._push('master', s.t_ns, s, s.p_w, s.q_nb, s.v_b, s.w_b)
+
+    def push_doppler(self, s: DopplerSample) -> bool:
+        """A Doppler radar sample (only models that use it take this stream; others ignore it)."""
+        if not self.model.uses_doppler:
+            return True
+        return self._push('doppler', s.t_ns, s, s.v_b if s.valid else np.zeros(3), [s.sigma])
 
     def _push(self, stream: str, t_ns: int, item, *arrays) -> bool:
         if not _finite(*arrays):
@@ -338,6 +357,29 @@ class TransferAlignment:
             self.deck_disp += 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
         self.last_ldv = s
 
+    def _on_doppler(self, t: int, s: DopplerSample) -> None:
+        """Match the slave velocity to the radar's, resolved with the slave's own attitude."""
+        self.counters.doppler += 1
+        if self.ins is None or not s.valid or t != self.t_ins:
+            return
+        st = self.ins.s
+        v_d = quat_to_dcm(st.q_nb) @ s.v_b
+        r = np.eye(2) * s.sigma ** 2
+        meas = self.model.doppler_measurement(st.v_n, (st.v_n - v_d)[0:2], r)
+        gate = self.cfg.gate_chi2 if self.cfg.gate_chi2 > 0.0 else None
+        res = self.kf.update(meas.z, meas.h, meas.r, gate)
+        self.last_nis = res.nis
+        if not res.accepted:
+            self.counters.gated += 1
+            return
+        self.counters.doppler_updates += 1
+        x = self.kf.x
+        self.last_x = x.copy()
+        zero = np.zeros(3)
+        match = Match(c_m=np.eye(3), w_m=zero, r=zero, u_n=zero, v_ref=v_d, z_vel=zero, r_vel=np.eye(3), ins=st)
+        self.kf.x = self.model.feedback(x, self.kf.P, match, st, self.corr)
+        self.t_doppler_update = t
+
     def _lever_arm(self) -> np.ndarray:
         """The lever arm put into the reference (ship axes): the surveyed spot (plus the
         estimated correction) under compensation, and the LDV-integrated deck displacement."""
@@ -361,7 +403,7 @@ class TransferAlignment:
             self._update(c_m, m, r, v_ref, u_n)
             self.matching = True
         else:
-            self.matching = False
+            self.matching = self.t_doppler_update == t
         if (t - self.t0) % self.out_period_ns == 0:
             self._emit(t)
 

@@ -31,6 +31,8 @@ class AlignmentFilterNode(node_util.CountingNode):
         self.create_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu, qos.STREAM)
         self.create_subscription(Odometry, topics.MASTER_ODOM, self.on_master, qos.STREAM)
         self.create_subscription(TwistWithCovarianceStamped, topics.LDV_TWIST, self.on_ldv, qos.STREAM)
+        if self.engine.model.uses_doppler:
+            self.create_subscription(TwistWithCovarianceStamped, topics.DOPPLER_TWIST, self.on_doppler, qos.STREAM)
         self.n_out = 0
 
     def on_imu(self, m: Imu) -> None:
@@ -41,6 +43,9 @@ class AlignmentFilterNode(node_util.CountingNode):
 
     def on_ldv(self, m: TwistWithCovarianceStamped) -> None:
         self._accept(topics.LDV_TWIST, self.engine.push_ldv(convert.msg_to_ldv(m)), m)
+
+    def on_doppler(self, m: TwistWithCovarianceStamped) -> None:
+        self._accept(topics.DOPPLER_TWIST, self.engine.push_doppler(convert.msg_to_doppler(m)), m)
 
     def _accept(self, topic: str, ok: bool, m) -> None:
         self.received[topic] += 1
@@ -73,7 +78,8 @@ class AlignmentFilterNode(node_util.CountingNode):
             'nis': f'{e.nis:.4g}', 'updates': c.updates, 'gated': c.gated,
             'rejected_nonfinite': c.rejected_nonfinite,
             'rejected_out_of_order': c.rejected_out_of_order, 'imu_gaps': c.imu_gaps,
-            'imu': c.imu, 'master': c.master, 'ldv': c.ldv,
+            'imu': c.imu, 'master': c.master, 'ldv': c.ldv, 'doppler': c.doppler,
+            'doppler_updates': c.doppler_updates,
             'pending': self.engine.merger.pending(),
             'model': self.engine.model.name, 'states': self.engine.n, 'algorithm': self.sc.filter.algorithm,
             'lever_arm_treatment': self.sc.filter.lever_arm_treatment,

@@ -9,18 +9,19 @@ run time by `filter.model`:
     seed003_21           seed003.py            phi, dV, eps, nabla, mounting mu, flexure theta, theta';
                                                velocity + attitude matching
     seed003_24           seed003.py            seed003_21 + master attitude phi_m
-    seed001_13           seed001.py            Doppler-aided in-flight model (library only: the engine
-                                               has no Doppler input yet)
+    seed001_13           seed001.py            phi, dV_E, dV_N, position, eps, Doppler errors: deck LDV
+                                               matching, then Doppler radar matching in flight
 
 `filter.lever_arm_states: true` appends dr (3) to any linear velocity-matching model
-(lever_arm.py). Matching modes: velocity (all but seed003), velocity + attitude (seed003_*);
-yaw-only and angular-rate matching are not implemented.
+(lever_arm.py). Matching modes: velocity (all), + attitude (seed003_*), + Doppler radar
+velocity (seed001_13); yaw-only and angular-rate matching are not implemented.
 """
 from __future__ import annotations
 
 from .base import Corrections, ErrorModel, Match, Measurement, Propagation
 from .lever_arm import LeverArmStates
 from .seed000 import Seed000LargeAngle, Seed000Linear
+from .seed001 import DopplerTuning, Seed001Doppler
 from .seed002 import Seed002Horizontal
 from .seed003 import Seed003VelocityAttitude
 from .velocity_matching import VelocityMatching
@@ -28,10 +29,10 @@ from .velocity_matching import VelocityMatching
 MODELS = ('vm15', 'vm12', 'seed000_6', 'seed000_large_angle', 'seed002_10', 'seed003_21', 'seed003_24',
           'seed001_13')
 NONLINEAR_MODELS = ('seed000_large_angle',)
-ENGINE_MODELS = MODELS[:-1]            # seed001_13 needs a Doppler stream the engine lacks
+DOPPLER_MODELS = ('seed001_13',)       # need doppler.enabled (the /doppler/twist stream)
 
 __all__ = ['Corrections', 'ErrorModel', 'Match', 'Measurement', 'Propagation', 'MODELS', 'NONLINEAR_MODELS',
-           'ENGINE_MODELS', 'make_model']
+           'DOPPLER_MODELS', 'make_model']
 
 
 def make_model(cfg) -> ErrorModel:
@@ -47,6 +48,8 @@ def make_model(cfg) -> ErrorModel:
         base = Seed002Horizontal(cfg)
     elif name in ('seed003_21', 'seed003_24'):
         base = Seed003VelocityAttitude(cfg, master_states=name == 'seed003_24')
+    elif name == 'seed001_13':
+        base = Seed001Doppler(DopplerTuning.from_config(cfg))
     else:
         raise ValueError(f'model {name!r} cannot run in the transfer-alignment engine')
     if cfg.lever_arm_states:

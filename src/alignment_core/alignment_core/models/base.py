@@ -92,6 +92,7 @@ class ErrorModel:
     attitude      slice of phi in the state
     velocity_rows nav axes (0 E, 1 N, 2 U) of the measurement's velocity rows, in row order
     nonlinear     True: the engine calls propagator() and needs a nonlinear filter
+    uses_doppler  True: the engine also matches the Doppler radar (doppler_measurement())
     """
     name: str = ''
     labels: tuple[str, ...] = ()
@@ -99,6 +100,7 @@ class ErrorModel:
     attitude: slice = slice(0, 3)
     velocity_rows: tuple[int, ...] = (0, 1, 2)
     nonlinear: bool = False
+    uses_doppler: bool = False
 
     @property
     def n(self) -> int:

@@ -33,8 +33,13 @@ the cross-track velocity error (and dC |V| with dVd along the track); a turn sep
 
 Discretisation as models/base.py (second-order Phi, Qd = diag(arw^2 h, vrw^2 h) on phi, dV).
 
-Not wired into the engine: it needs a Doppler radar stream (/doppler/twist, body-frame
-velocity) that the transfer-alignment engine does not take yet; see `Seed001Doppler.wiring`.
+In the engine (`filter.model: seed001_13`, needs `doppler.enabled`): on the deck the LDV /
+master velocity match gives the horizontal rows (z_vel_(E,N), H = [0 | I2 | 0]) with the vertical
+velocity held to the reference; every valid Doppler sample (/doppler/twist) is matched as
+above, with R = sigma^2 I from the sample and the vertical velocity held to the radar's
+(C_est v_D^b)_U. Feedback: phi, dV_E, dV_N, lat/lon, eps; the radar's dVd, eps_D, dC stay in
+the state (z uses the raw reading). The position prior is 1 m (the engine starts at the
+surveyed deck spot). The radar's latency, if any, is not modelled (its stamp is used).
 """
 from __future__ import annotations
 
@@ -44,7 +49,20 @@ import numpy as np
 
 from .. import earth
 from ..attitude import ARCMIN, DPH
-from .base import DV, EPS, OTHER, PHI, ErrorModel, Measurement, Propagation, skew_into
+from ..strapdown import NavState, quat_mul, quat_to_dcm, rotvec_to_quat
+from .base import (
+    DV,
+    EPS,
+    OTHER,
+    PHI,
+    Corrections,
+    ErrorModel,
+    Match,
+    Measurement,
+    Propagation,
+    relative_misalignment,
+    skew_into,
+)
 
 LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dlon', 'dlat', 'eps_x', 'eps_y', 'eps_z',
           'dVd', 'eps_D', 'dC')
@@ -66,6 +84,18 @@ class DopplerTuning:
     vrw_ugpshz: float = 50.0
     doppler_noise_mps: float = 0.1
 
+    @staticmethod
+    def from_config(cfg) -> DopplerTuning:
+        """The engine's tuning from a FilterConfig (attitude, velocity, gyro, noise, radar priors)."""
+        yaw = cfg.init_yaw_sigma_deg if cfg.init_yaw_sigma_deg > 0.0 else cfg.init_attitude_sigma_deg
+        return DopplerTuning(tilt_sigma_arcmin=cfg.init_attitude_sigma_deg * 60.0, yaw_sigma_arcmin=yaw * 60.0,
+                             velocity_sigma_mps=cfg.init_velocity_sigma_mps, position_sigma_m=1.0,
+                             gyro_bias_sigma_dph=cfg.gyro_bias_sigma_dph,
+                             doppler_offset_sigma_mps=cfg.doppler_bias_sigma_mps,
+                             drift_angle_sigma_arcmin=cfg.doppler_drift_sigma_arcmin,
+                             scale_sigma=cfg.doppler_scale_sigma_ppm * 1e-6, arw_dpsh=cfg.arw_dpsh,
+                             vrw_ugpshz=cfg.vrw_ugpshz)
+
 
 class Seed001Doppler(ErrorModel):
     """seed001_13 (module docstring). `continuous(p)` / `transition(p)` use p.v_n (V_U may be
@@ -75,10 +105,7 @@ class Seed001Doppler(ErrorModel):
     kinds = (PHI,) * 3 + (DV,) * 2 + (OTHER,) * 2 + (EPS,) * 3 + (OTHER,) * 3
     attitude = slice(0, 3)
     velocity_rows = (0, 1)
-    wiring = ('engine: a DopplerSample stream (t_ns, body-frame velocity v_b, sigma) pushed like the '
-              'LDV; at each Doppler stamp form v_D = C_est v_b, z = (V_slave - v_D)_(E,N), '
-              'doppler_measurement(v_n, z, r); feedback phi, dV_E, dV_N, lat/lon, eps, and add '
-              'dVd, eps_D, dC to the radar corrections applied before resolving v_b')
+    uses_doppler = True
 
     def __init__(self, tuning: DopplerTuning = DopplerTuning()) -> None:
         self.t = tuning
@@ -152,3 +179,25 @@ class Seed001Doppler(ErrorModel):
         if r is None:
             r = np.eye(2) * self.t.doppler_noise_mps ** 2
         return Measurement(np.asarray(z, dtype=float), self.measurement_matrix(v_n), r)
+
+    def measurement(self, m: Match, corr: Corrections) -> Measurement:
+        """The deck's velocity match (LDV + master), horizontal rows: z = dV_(E,N) + v."""
+        h = np.zeros((2, 13))
+        h[0, 3] = h[1, 4] = 1.0
+        return Measurement(m.z_vel[0:2], h, m.r_vel[0:2, 0:2])
+
+    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        """phi, dV_E, dV_N, position and eps fed back; vertical velocity held to m.v_ref[2];
+        the radar's errors kept in the state."""
+        q = quat_mul(rotvec_to_quat(x[0:3]), nav.q_nb)
+        nav.q_nb = q / np.sqrt(q @ q)
+        nav.v_n = np.array([nav.v_n[0] - x[3], nav.v_n[1] - x[4], m.v_ref[2]])
+        nav.lon = nav.lon - float(x[5])
+        nav.lat = nav.lat - float(x[6])
+        corr.bg = corr.bg + x[7:10]
+        x_new = np.zeros(13)
+        x_new[10:13] = x[10:13]
+        return x_new
+
+    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
+        return relative_misalignment(m.c_m, quat_to_dcm(nav.q_nb), p[0:3, 0:3])
