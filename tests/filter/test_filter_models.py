@@ -55,6 +55,8 @@ def test_every_model_runs_in_the_engine_and_labels_its_state(model):
      'lever_arm_states is not available'),
     ({'filter.model': 'seed001_13'}, 'doppler.enabled'),
     ({'filter.model': 'seed001_13', 'doppler.enabled': True, 'filter.lever_arm_states': True}, 'Doppler rows'),
+    ({'filter.model': 'seed001_13', 'doppler.enabled': True, 'filter.algorithm': 'stf_multiple'},
+     'mix the LDV and Doppler'),
     ({'filter.model': 'seed004'}, 'model'),
     ({'filter.lever_arm_treatment': 'magic'}, 'lever_arm_treatment'),
     ({'filter.flexure_tau_s': [3.0, 0.0, 3.0]}, 'flexure'),
