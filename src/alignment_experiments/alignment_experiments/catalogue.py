@@ -172,6 +172,40 @@ DECK_GOAL = Experiment(
 )
 
 
+CONSISTENCY_CATAPULT = Experiment(
+    name='consistency_catapult',
+    title='Consistency: 50 runs of the default catapult scenario, recommended filter',
+    description=(
+        "The default `catapult` scenario (seed 000's conditions with 60 s of deck matching at sea state 4, "
+        "the 3 s 2 g stroke, no vibration, increment IMU) with the default (recommended) filter, 50 seeds. "
+        "An honest filter's average 3-dof misalignment NEES lies inside the 95 % chi-square bounds."),
+    scenario='catapult',
+    base=(),
+    cells=(Cell('default', (('filter', 'default'),), ()),),
+    seeds=50,
+    score_at='release',
+    series='filter',
+    quick_base=(('duration_s', 15.0), ('aircraft.catapult.launch_time_s', 8.0)),
+)
+
+CONSISTENCY_DECK = Experiment(
+    name='consistency_deck',
+    title='Consistency: 50 runs of the default deck scenario, recommended filter',
+    description=(
+        "The default `deck` scenario (300 s of velocity matching at sea state 4, paper-mode ship) with the "
+        "default (recommended) filter, 50 seeds, scored at 250 s. An honest filter's average 3-dof "
+        "misalignment NEES lies inside the 95 % chi-square bounds."),
+    scenario='deck',
+    base=(),
+    cells=(Cell('default', (('filter', 'default'),), ()),),
+    seeds=50,
+    score_at=250.0,
+    settle_arcmin=(0.6, 0.6, 6.0),
+    series='filter',
+    quick_base=(('duration_s', 20.0),),
+)
+
+
 @dataclass
 class Catalogue:
     experiments: dict[str, Experiment] = field(default_factory=dict)
@@ -187,5 +221,5 @@ class Catalogue:
 
 
 CATALOGUE = Catalogue()
-for _e in (SEED000, CATAPULT_GOAL, DECK_GOAL):
+for _e in (SEED000, CATAPULT_GOAL, DECK_GOAL, CONSISTENCY_CATAPULT, CONSISTENCY_DECK):
     CATALOGUE.add(_e)
