@@ -5,7 +5,10 @@ beta = 2.146 / tau, white w of spectral density q = 4 beta^3 sigma^2, so that
 var(theta) = sigma^2, var(theta') = beta^2 sigma^2 and the autocorrelation
 sigma^2 e^{-beta t} (1 + beta t) falls to 1/e at t = tau. Optionally a second such process
 (sigma2, tau2; double-peaked deck spectra) is added, plus a static part drawn once per axis
-(1-sigma static_arcmin). theta is a rotation vector in aircraft axes:
+(1-sigma static_arcmin). Optionally the intensity changes once (seed 003's model-error case:
+0.02 -> 0.05 rad after 150 s): from `change_at_s` on, the driving noise of every process is
+scaled by `change_factor`, so the stationary sigma moves to change_factor * sigma within a
+few tau (the state itself is continuous). theta is a rotation vector in aircraft axes:
     C_a^s(t) = exp([mu x]) exp([theta(t) x])
 (mu the mounting misalignment), so the aircraft rate relative to the ship is
 omega_sa^a = J_r(theta) theta' (J_r the right Jacobian of SO(3)).
@@ -39,8 +42,12 @@ class FlexureConfig:
     sigma2_arcmin: float = 0.0
     tau2_s: float = 1.0
     static_arcmin: float = 3.0
+    change_at_s: float = 0.0          # 0 = never
+    change_factor: float = 1.0
 
     def validate(self) -> None:
+        require(self.change_at_s >= 0.0, f"change_at_s must be >= 0 (0 = never), got {self.change_at_s}")
+        require(0.0 <= self.change_factor <= 100.0, f"change_factor must be in [0, 100], got {self.change_factor}")
         for k in ('sigma_arcmin', 'sigma2_arcmin', 'static_arcmin'):
             v = getattr(self, k)
             require(0.0 <= v <= 600.0, f"{k} must be in [0, 600], got {v}")
@@ -105,6 +112,8 @@ class FlexureProcess:
         self._th = np.empty((1024, 3))
         self._thd = np.empty((1024, 3))
         self._n = 0
+        self.k_change = (int(round(cfg.change_at_s * rate_hz)) if cfg.change_at_s > 0.0 and cfg.change_factor != 1.0
+                         else None)
         self._store()
 
     def _store(self) -> None:
@@ -120,6 +129,9 @@ class FlexureProcess:
         while self._n <= k_max:
             m = min(k_max + 1 - self._n, 4096)
             noise = self.rng.standard_normal((m,) + self.x.shape)
+            if self.k_change is not None:
+                k = np.arange(self._n, self._n + m)        # sample index each step produces
+                noise[k >= self.k_change] *= self.cfg.change_factor
             for j in range(m):
                 self.x = self.x @ self.phi_t + noise[j] @ self.l_t
                 self._store()

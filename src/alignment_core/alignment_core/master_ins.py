@@ -70,6 +70,8 @@ class MasterConfig:
     vrw_ugpshz: float = 0.0
     rate_hz: float = 0.0               # 0 = the scenario rate; else a divisor of it
     latency_s: float = 0.0             # data valid at t are stamped (and arrive at) t + latency
+    noise_change_at_s: float = 0.0     # 0 = never; from then on velocity noise x noise_change_factor
+    noise_change_factor: float = 1.0   # (seed 003's model-error case: variance x 50 after 100 s)
 
     def validate(self) -> None:
         from .sensor_presets import MASTER_PRESETS, check_preset
@@ -87,6 +89,10 @@ class MasterConfig:
                 "state); use initial: aligned")
         require(0.0 <= self.rate_hz <= 2000.0, f"rate_hz must be in [0, 2000], got {self.rate_hz}")
         require(0.0 <= self.latency_s <= 1.0, f"latency_s must be in [0, 1] s, got {self.latency_s}")
+        require(self.noise_change_at_s >= 0.0,
+                f"noise_change_at_s must be >= 0 (0 = never), got {self.noise_change_at_s}")
+        require(0.0 <= self.noise_change_factor <= 1000.0,
+                f"noise_change_factor must be in [0, 1000], got {self.noise_change_factor}")
 
 
 def error_dynamics(lat: float, damping: str = 'velocity', zeta: float = 0.5,
@@ -190,8 +196,10 @@ class MasterInsModel:
     call, `last_phi` (K, 3) and `last_dv` (K, 3) hold the attitude and velocity errors (nav
     frame) of the samples returned: the truth for scoring the filter's master states."""
 
-    def __init__(self, cfg: MasterConfig, seed: int, lat: float) -> None:
+    def __init__(self, cfg: MasterConfig, seed: int, lat: float, t0_ns: int = 0) -> None:
         self.cfg = cfg
+        self.t_change_ns = (t0_ns + int(round(cfg.noise_change_at_s * 1e9))
+                            if cfg.noise_change_at_s > 0.0 and cfg.noise_change_factor != 1.0 else None)
         self.rng = stage_rng(seed, 'master_ins')
         eps = self.rng.standard_normal(3) * cfg.gyro_bias_dph * DPH        # nav axes
         nab = self.rng.standard_normal(3) * cfg.accel_bias_ug * UG
@@ -216,7 +224,10 @@ class MasterInsModel:
 
     def measure_batch(self, sb: ShipBatch) -> list[MasterSample]:
         c_true = Rotation.from_quat(sb.q_nb)
-        v_n = c_true.apply(sb.v_b) + self.rng.standard_normal((len(sb), 3)) * self.cfg.velocity_noise_mps
+        noise = self.rng.standard_normal((len(sb), 3)) * self.cfg.velocity_noise_mps
+        if self.t_change_ns is not None:
+            noise[sb.t_ns >= self.t_change_ns] *= self.cfg.noise_change_factor
+        v_n = c_true.apply(sb.v_b) + noise
         if self.schuler is None:
             c_est = self.err_rot * c_true
             self.last_phi = np.broadcast_to(self.phi, (len(sb), 3)).copy()
@@ -251,7 +262,7 @@ class MasterInsStage:
     released when simulation time reaches the stamp (node: `step`; batch: `run_batch`)."""
 
     def __init__(self, cfg: MasterConfig, seed: int, lat: float, base_rate_hz: float, t0_ns: int) -> None:
-        self.model = MasterInsModel(cfg, seed, lat)
+        self.model = MasterInsModel(cfg, seed, lat, t0_ns)
         self.timing = SensorTiming(cfg.rate_hz, cfg.latency_s, base_rate_hz, t0_ns)
 
     def _outputs(self, sb: ShipBatch) -> list[MasterOutput]:
