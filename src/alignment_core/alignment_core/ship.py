@@ -32,13 +32,30 @@ from .samples import ShipSample
 KNOT = 0.514444
 
 # seed 002, Table 3: amplitudes (deg) roll, pitch, yaw by sea state
-PAPER_AMPLITUDE_DEG = {3: (1.25, 1.01, 1.03), 4: (2.71, 1.71, 1.92), 5: (5.62, 2.91, 3.36),
-                       6: (7.47, 3.15, 4.15), 7: (9.84, 5.27, 6.11)}
-# periods (s) roll, pitch, yaw, heave for a 175 m ship (ship-motion.md)
-PAPER_PERIOD_S = {3: (17.0, 6.5, 8.0, 7.0), 4: (17.0, 7.0, 8.5, 7.5), 5: (17.0, 7.5, 9.0, 8.0),
-                  6: (17.0, 7.75, 9.25, 8.5), 7: (18.5, 8.0, 9.5, 9.0)}
+PAPER_TABLE3_DEG = {3: (1.25, 1.01, 1.03), 4: (2.71, 1.71, 1.92), 5: (5.62, 2.91, 3.36),
+                    6: (7.47, 3.15, 4.15), 7: (9.84, 5.27, 6.11)}
+# periods (s) roll, pitch, yaw, heave for a 175 m ship (ship-motion.md); 1-2 and 8-9 extend
+# its ranges (roll at the natural period, pitch/heave/yaw lengthening with the wave period)
+PAPER_PERIOD_S = {1: (17.0, 6.0, 7.5, 6.5), 2: (17.0, 6.25, 7.75, 6.75),
+                  3: (17.0, 6.5, 8.0, 7.0), 4: (17.0, 7.0, 8.5, 7.5), 5: (17.0, 7.5, 9.0, 8.0),
+                  6: (17.0, 7.75, 9.25, 8.5), 7: (18.5, 8.0, 9.5, 9.0),
+                  8: (18.5, 8.5, 10.0, 9.5), 9: (18.5, 9.0, 10.5, 10.0)}
 # Bales (1983) mean significant wave height (m) by sea state
 BALES_HS_M = {0: 0.0, 1: 0.05, 2: 0.3, 3: 0.88, 4: 1.88, 5: 3.25, 6: 5.0, 7: 7.5, 8: 11.5, 9: 14.0}
+
+
+def _paper_amplitudes() -> dict[int, tuple[float, float, float]]:
+    """Seed 002 Table 3 (sea states 3-7) plus 1-2 and 8-9, which the paper does not give:
+    linear response at a fixed period, i.e. amplitude proportional to the Bales Hs, with the
+    amplitude per metre of the nearest tabulated sea state (3 for 1-2, 7 for 8-9)."""
+    out = dict(PAPER_TABLE3_DEG)
+    for ss, ref in ((1, 3), (2, 3), (8, 7), (9, 7)):
+        k = BALES_HS_M[ss] / BALES_HS_M[ref]
+        out[ss] = tuple(round(a * k, 3) for a in PAPER_TABLE3_DEG[ref])
+    return dict(sorted(out.items()))
+
+
+PAPER_AMPLITUDE_DEG = _paper_amplitudes()
 
 
 @dataclass(frozen=True)
@@ -105,7 +122,7 @@ class ShipConfig:
         require(0 <= self.sea_state <= 9, f"sea_state must be a WMO code 0-9, got {self.sea_state}")
         if self.mode == 'paper':
             require(self.sea_state in PAPER_AMPLITUDE_DEG or self.sea_state == 0,
-                    f"paper mode has amplitudes for sea states 3-7 (seed 002 Table 3) "
+                    f"paper mode has amplitudes for sea states 1-9 (seed 002 Table 3, extended) "
                     f"and 0 (calm), got {self.sea_state}")
         require(0.0 <= self.speed_kn <= 40.0, f"speed_kn must be in [0, 40], got {self.speed_kn}")
         require(-90.0 < self.lat_deg < 90.0, f"lat_deg must be in (-90, 90), got {self.lat_deg}")
