@@ -32,9 +32,9 @@ def test_dispatch_by_mode():
     sc = scenario.load('deck', {'ship.mode': 'spectral', 'ship.sea_state': 8})
     src = pipeline.ship_source(sc)
     assert isinstance(src, SpectralShipMotion) and src.sea.hs_m == 11.5 and src.sea.tp_s == 16.4
-    # the paper mode has no amplitudes for sea state 8; the spectral mode does
-    with pytest.raises(ConfigError, match='paper mode has amplitudes'):
-        scenario.load('deck', {'ship.sea_state': 8})
+    # beyond the WMO codes neither mode has a sea
+    with pytest.raises(ConfigError, match='sea_state'):
+        scenario.load('deck', {'ship.sea_state': 10})
 
 
 def test_paper_mode_is_unchanged():
