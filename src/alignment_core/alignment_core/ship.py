@@ -51,7 +51,7 @@ def _paper_amplitudes() -> dict[int, tuple[float, float, float]]:
     out = dict(PAPER_TABLE3_DEG)
     for ss, ref in ((1, 3), (2, 3), (8, 7), (9, 7)):
         k = BALES_HS_M[ss] / BALES_HS_M[ref]
-        out[ss] = tuple(round(a * k, 3) for a in PAPER_TABLE3_DEG[ref])
+        out[ss] = tuple(a * k for a in PAPER_TABLE3_DEG[ref])
     return dict(sorted(out.items()))
 
 
