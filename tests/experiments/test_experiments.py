@@ -42,8 +42,8 @@ def test_quick_experiment_report(tmp_path, name):
     rows = results.read_runs(out / 'runs.csv')
     assert len(rows) == len(exp.cells) * 2
     for r in rows:
-        err = [float(r[f'err_{a}_arcmin']) for a in ('roll', 'pitch', 'yaw')]
-        sig = [float(r[f'sigma_{a}_arcmin']) for a in ('roll', 'pitch', 'yaw')]
+        err = [float(r[f'err_{a}_arcmin']) for a in exp.axes]
+        sig = [float(r[f'sigma_{a}_arcmin']) for a in exp.axes]
         assert all(np.isfinite(err)) and all(s > 0 for s in sig)
         assert int(r['updates']) > 0
     md = (out / 'report.md').read_text()

@@ -36,9 +36,10 @@ class RunSpec:
     scenario: str
     overrides: tuple[tuple[str, object], ...]
     seed: int
-    score_at: str | float = 'release'            # 'release' or seconds after the start
+    score_at: str | float = 'release'            # 'release', 'release+S' or seconds after the start
     settle_arcmin: tuple[float, float, float] = (1.0, 1.0, 1.0)
     values: tuple[tuple[str, object], ...] = ()
+    quantity: str = 'misalignment'               # or 'attitude': the slave INS attitude error (nav frame)
 
 
 @dataclass
@@ -73,6 +74,15 @@ def true_misalignment(inp: pipeline.Inputs) -> np.ndarray:
     return rel
 
 
+def attitude_errors(est: list, q_true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(K, 3) slave attitude error phi (nav frame, C_est = (I - [phi x]) C_true) and its 1-sigma
+    from the filter's attitude covariance, at each estimate."""
+    q_est = np.array([e.q_nb for e in est]).reshape(-1, 4)
+    phi = (Rotation.from_quat(q_true) * Rotation.from_quat(q_est).inv()).as_rotvec()
+    sig = np.sqrt(np.array([np.diag(e.attitude_cov) for e in est]).reshape(-1, 3))
+    return phi, sig
+
+
 def run_one(spec: RunSpec) -> RunOutcome:
     """Simulate and align one run in this process, score it."""
     wall = time.perf_counter()
@@ -81,13 +91,18 @@ def run_one(spec: RunSpec) -> RunOutcome:
     est = pipeline.align(sc, inp).outputs
     t0 = sc.t0_ns
     t_ns = np.array([e.t_ns for e in est], dtype=np.int64)
-    mu_t = true_misalignment(inp)
-    k_truth = np.minimum(np.searchsorted(inp.ships.t_ns, t_ns), len(mu_t) - 1)
-    err = np.array([e.misalignment for e in est]).reshape(-1, 3) - mu_t[k_truth]
-    sig = np.array([e.misalignment_sigma for e in est]).reshape(-1, 3)
-    if spec.score_at == 'release':
-        on_deck = inp.ships.t_ns[inp.truth['on_deck']]
-        t_score = int(on_deck[-1]) if len(on_deck) else int(t_ns[-1])
+    k_truth = np.minimum(np.searchsorted(inp.ships.t_ns, t_ns), len(inp.ships.t_ns) - 1)
+    if spec.quantity == 'attitude':
+        err, sig = attitude_errors(est, inp.truth['q_nb'][k_truth])
+    elif spec.quantity == 'misalignment':
+        err = np.array([e.misalignment for e in est]).reshape(-1, 3) - true_misalignment(inp)[k_truth]
+        sig = np.array([e.misalignment_sigma for e in est]).reshape(-1, 3)
+    else:
+        raise ValueError(f"quantity must be 'misalignment' or 'attitude', got {spec.quantity!r}")
+    on_deck = inp.ships.t_ns[inp.truth['on_deck']]
+    t_release = int(on_deck[-1]) if len(on_deck) else int(t_ns[-1])
+    if isinstance(spec.score_at, str) and spec.score_at.startswith('release'):
+        t_score = t_release + int(round(float(spec.score_at[len('release'):] or 0.0) * 1e9))
     else:
         t_score = t0 + int(round(float(spec.score_at) * 1e9))
     k = int(np.searchsorted(t_ns, t_score, side='right')) - 1

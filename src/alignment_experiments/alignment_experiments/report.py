@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .catalogue import AXES, Experiment
+from .catalogue import Experiment
 from .monte_carlo import RunOutcome
 from .results import cells_of, code_version, value_names
 from .statistics import axis_stats, nees_bounds
@@ -39,7 +39,7 @@ def _plots(out: Path, exp: Experiment, cells: dict[str, list[RunOutcome]]) -> li
     show = list(cells.items())[:MAX_SERIES_CELLS]
     fig, axs = plt.subplots(len(show), 3, figsize=(13, 2.4 * len(show) + 0.6), squeeze=False, sharex='row')
     for r, (label, runs) in enumerate(show):
-        for i, a in enumerate(AXES):
+        for i, a in enumerate(exp.axes):
             ax = axs[r, i]
             for o in runs:
                 ax.plot(o.t_s, o.err_t[:, i], lw=0.6, alpha=0.6)
@@ -69,7 +69,7 @@ def _plots(out: Path, exp: Experiment, cells: dict[str, list[RunOutcome]]) -> li
     sig = np.array([[np.mean([o.sigma[i] for o in runs]) for i in range(3)] for runs in cells.values()])
     fig, ax = plt.subplots(figsize=(max(6.0, 0.55 * len(labels) * 3), 4.2))
     x = np.arange(len(labels))
-    for i, a in enumerate(AXES):
+    for i, a in enumerate(exp.axes):
         ax.bar(x + (i - 1) * 0.27, rms[:, i], 0.27, label=f'{a} RMS')
         ax.plot(x + (i - 1) * 0.27, sig[:, i], 'k_', ms=12)
     ax.set_xticks(x, labels, rotation=35, ha='right', fontsize=7)
@@ -96,7 +96,7 @@ def _plots(out: Path, exp: Experiment, cells: dict[str, list[RunOutcome]]) -> li
             xs = [p[0] for p in pts]
             for i in range(3):
                 axs[0, i].plot(xs, [p[1][i] for p in pts], 'o-', label=' '.join(f'{k}={v}' for k, v in key) or 'all')
-        for i, a in enumerate(AXES):
+        for i, a in enumerate(exp.axes):
             axs[0, i].set_title(f'{a}: RMS error (arcmin)')
             axs[0, i].set_xlabel(exp.sweep)
             axs[0, i].set_yscale('log')
@@ -120,7 +120,7 @@ def _plots(out: Path, exp: Experiment, cells: dict[str, list[RunOutcome]]) -> li
     ax.axhline(hi, color='k', ls='--', lw=0.8, label=f'95 % bounds ({n_runs} runs, 3 dof)')
     ax.set_yscale('log')
     ax.set_xlabel('time since start (s)')
-    ax.set_ylabel('average NEES (misalignment, 3 dof)')
+    ax.set_ylabel(f'average NEES ({exp.quantity}, 3 dof)')
     ax.grid(alpha=0.3)
     ax.legend(fontsize=6)
     fig.tight_layout()
@@ -135,14 +135,19 @@ def write_report(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: 
     cells = cells_of(outcomes)
     files = _plots(out, exp, cells)
     vn = value_names(outcomes)
-    score = 'at the release (last on-deck sample)' if exp.score_at == 'release' else f'at t = {exp.score_at} s'
+    if isinstance(exp.score_at, str):
+        score = 'at the release (last on-deck sample)' + (f', {exp.score_at[8:]} s after' if exp.score_at[7:] else '')
+    else:
+        score = f'at t = {exp.score_at} s'
     score_times = sorted({round(o.score_time_s, 3) for o in outcomes})
     md = [f'# {exp.title}', '', exp.description, '',
           f'- Experiment `{exp.name}`, scenario `{exp.scenario}`, {len(cells)} cells × {seeds} seeds '
           f'(seeds {first_seed}-{first_seed + seeds - 1}, the same in every cell), {len(outcomes)} runs, '
           f'batch pipeline; code `{code_version()}`.',
-          f'- Scored {score} (actual score times: {", ".join(str(t) for t in score_times[:4])} s) against '
-          'the true master-to-aircraft attitude; errors in arcmin, axes ROS FLU (roll = x, pitch = y, yaw = z).',
+          f'- Scored {score} (actual score times: {", ".join(str(t) for t in score_times[:4])} s): '
+          + ('the misalignment estimate against the true master-to-aircraft attitude (mounting and flexure); '
+             'arcmin, aircraft axes ROS FLU (roll = x, pitch = y, yaw = z).' if exp.quantity == 'misalignment' else
+             'the slave INS attitude error against the aircraft truth, nav frame (E, N, U), arcmin.'),
           '- Base overrides: ' + ', '.join(f'`{k}={v}`' for k, v in exp.base), '',
           '## Results per cell', '',
           'RMS and 95th percentile of |error| over the seeds, the filter\'s mean 1σ, the fraction of runs '
@@ -163,22 +168,29 @@ def write_report(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: 
                     + ['/'.join(_f(s.rms) for s in st), '/'.join(_f(s.p95) for s in st),
                        '/'.join(_f(s.mean_sigma) for s in st), '/'.join(_f(s.in_2sigma, 2) for s in st),
                        f'{_f(ne, 2)} [{_f(lo, 2)}, {_f(hi, 2)}]', '/'.join(_f(m, 1) for m in med)])
-    md.append(_table(vn + ['RMS r/p/y', 'p95 r/p/y', 'mean 1σ r/p/y', 'in 2σ', 'NEES [95 %]', 'settle (s)'], rows))
+    ax = '/'.join(a[0] if len(a) > 1 else a for a in exp.axes)
+    md.append(_table(vn + [f'RMS {ax}', f'p95 {ax}', f'mean 1σ {ax}', 'in 2σ', 'NEES [95 %]', 'settle (s)'], rows))
     if exp.references:
-        md += ['', '## Beside the paper', '', f'{exp.reference_source}. Ours: RMS over the seeds of the matching '
-               'cell. Ratio = |paper| / ours (how many times smaller our error is).', '']
+        md += ['', '## Beside the paper', '', f'{exp.reference_source}. Ours: the RMS error (or mean 1σ, as the '
+               'paper reports) over the seeds of the matching cell. Ratio = |paper| / ours (how many times smaller '
+               'ours is).', '']
         rows = []
         for ref in exp.references:
             for label, runs in cells.items():
                 if not _matches(dict(runs[0].spec.values), ref.match):
                     continue
-                rms = np.sqrt(np.mean([o.err ** 2 for o in runs], axis=0))
-                cols = []
+                if ref.stat == 'sigma':
+                    ours = np.mean([o.sigma for o in runs], axis=0)
+                else:
+                    ours = np.sqrt(np.mean([o.err ** 2 for o in runs], axis=0))
+                cols = [('mean 1σ' if ref.stat == 'sigma' else 'RMS error')]
                 for i in range(3):
                     p = ref.arcmin[i]
-                    cols.append('–' if p is None else f'{p:.2f} / {rms[i]:.3f} / {abs(p) / rms[i]:.3g}×')
+                    cols.append('–' if p is None else f'{p:.3g} / {ours[i]:.3g} / {abs(p) / ours[i]:.3g}×')
                 rows.append([label] + cols)
-        md.append(_table(['cell'] + [f'{a}: paper / ours / ratio' for a in AXES], rows))
+        md.append(_table(['cell', 'ours'] + [f'{a}: paper / ours / ratio' for a in exp.axes], rows))
+    if exp.notes:
+        md += ['', '## Reading', '', exp.notes]
     md += ['', '## Plots', ''] + [f'![{f}]({f})' for f in files]
     md += ['', 'Files: `runs.csv` (one row per run), `summary.csv` (per cell and axis), `meta.json`, '
            '`series.npz` (error and 1σ histories), `timing.json`.', '']

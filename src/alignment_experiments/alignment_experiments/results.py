@@ -50,11 +50,11 @@ def value_names(outcomes: list[RunOutcome]) -> list[str]:
     return names
 
 
-def runs_table(outcomes: list[RunOutcome]) -> tuple[list[str], list[list]]:
+def runs_table(outcomes: list[RunOutcome], axes: tuple[str, ...] = AXES) -> tuple[list[str], list[list]]:
     vn = value_names(outcomes)
     header = (['run', 'cell'] + vn + ['seed', 'score_time_s']
-              + [f'err_{a}_arcmin' for a in AXES] + [f'sigma_{a}_arcmin' for a in AXES]
-              + ['nees'] + [f'settle_{a}_s' for a in AXES] + ['nis_mean', 'updates'])
+              + [f'err_{a}_arcmin' for a in axes] + [f'sigma_{a}_arcmin' for a in axes]
+              + ['nees'] + [f'settle_{a}_s' for a in axes] + ['nis_mean', 'updates'])
     rows = []
     for o in outcomes:
         vals = dict(o.spec.values)
@@ -72,7 +72,7 @@ def cells_of(outcomes: list[RunOutcome]) -> dict[str, list[RunOutcome]]:
     return out
 
 
-def summary_table(outcomes: list[RunOutcome]) -> tuple[list[str], list[list]]:
+def summary_table(outcomes: list[RunOutcome], axes: tuple[str, ...] = AXES) -> tuple[list[str], list[list]]:
     vn = value_names(outcomes)
     header = (['cell'] + vn + ['axis', 'n', 'mean_arcmin', 'std_arcmin', 'rms_arcmin', 'p95_arcmin',
                                'mean_sigma_arcmin', 'in_2sigma', 'nees', 'nees_lo', 'nees_hi',
@@ -84,7 +84,7 @@ def summary_table(outcomes: list[RunOutcome]) -> tuple[list[str], list[list]]:
         sig = np.array([o.sigma for o in runs])
         settle = np.array([o.settle_s for o in runs])
         lo, hi = nees_bounds(1, len(runs))
-        for i, a in enumerate(AXES):
+        for i, a in enumerate(axes):
             s = axis_stats(err[:, i], sig[:, i])
             ok = np.isfinite(settle[:, i])
             rows.append([label] + [vals.get(k, '') for k in vn]
@@ -105,8 +105,8 @@ def code_version(root: Path | None = None) -> str:
 def write(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: int, first_seed: int,
           wall_s: float, workers: int) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    (out / 'runs.csv').write_text(_csv(*runs_table(outcomes)))
-    (out / 'summary.csv').write_text(_csv(*summary_table(outcomes)))
+    (out / 'runs.csv').write_text(_csv(*runs_table(outcomes, exp.axes)))
+    (out / 'summary.csv').write_text(_csv(*summary_table(outcomes, exp.axes)))
     meta = {'schema_version': SCHEMA_VERSION, 'experiment': dataclasses.asdict(exp), 'seeds': seeds,
             'first_seed': first_seed, 'runs': len(outcomes), 'code_version': code_version()}
     (out / 'meta.json').write_text(json.dumps(meta, indent=1, default=str) + '\n')
