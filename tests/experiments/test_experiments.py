@@ -45,7 +45,7 @@ def test_quick_experiment_report(tmp_path, name):
         err = [float(r[f'err_{a}_arcmin']) for a in exp.axes]
         sig = [float(r[f'sigma_{a}_arcmin']) for a in exp.axes]
         assert all(np.isfinite(err)) and all(s > 0 for s in sig)
-        assert int(r['updates']) > 0
+        assert int(r['updates']) > 0 or np.isfinite(float(r['nis_mean']))     # matched something (LDV or Doppler)
     md = (out / 'report.md').read_text()
     assert md.startswith('# ') and '## Results per cell' in md and '## Plots' in md
     assert md.count('\n| ') >= len(exp.cells) + 1          # header + one row per cell at least
