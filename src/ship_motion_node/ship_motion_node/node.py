@@ -15,6 +15,8 @@ from alignment_core.config import ConfigError
 from alignment_ros import convert, node_util, topics
 from alignment_ros.params import ScenarioParameters
 
+CHUNK = 25   # ship samples computed at once (0.25 s at 100 Hz)
+
 
 class ShipMotionNode(node_util.CountingNode):
     def __init__(self) -> None:
@@ -78,11 +80,16 @@ class ShipMotionNode(node_util.CountingNode):
         wall0 = time.monotonic()
         self.get_logger().info(f'scenario {sc.name}: {sc.duration_s} s at {sc.rate_hz} Hz, '
                                f'real-time factor {rtf}')
+        chunk: list = []
         for k in range(sc.n_samples):
             if stop():
                 break
             tau = (k * sc.dt_ns) / 1e9
-            s = self.source.samples(np.array([tau]), sc.t0_ns, sc.dt_ns, k0=k)[0]
+            if not chunk:
+                # evaluated CHUNK samples at a time: the wave sums vectorise (same numbers, a fraction of the cost)
+                ks = np.arange(k, min(k + CHUNK, sc.n_samples))
+                chunk = self.source.samples((ks * sc.dt_ns) / 1e9, sc.t0_ns, sc.dt_ns, k0=k)[::-1]
+            s = chunk.pop()
             clk = Clock()
             clk.clock = convert.stamp(s.t_ns)
             self.send(topics.CLOCK, clk)
