@@ -20,7 +20,7 @@ import argparse
 
 import numpy as np
 
-from alignment_core.ship import PAPER_AMPLITUDE_DEG, ShipConfig
+from alignment_core.ship import PAPER_TABLE3_DEG, ShipConfig
 from alignment_core.ship_waves import SpectralShipMotion
 
 RAD2DEG = 180.0 / np.pi
@@ -61,7 +61,7 @@ def main() -> None:
                                  spreading=a.spreading, rao_source=a.rao)
                 s2, tz = stats(cfg, a.seeds)
                 sea = SpectralShipMotion(cfg, 1).sea
-                pa = PAPER_AMPLITUDE_DEG.get(ss)
+                pa = PAPER_TABLE3_DEG.get(ss)   # the paper gives 3-7 only
                 pap = '/'.join(f'{x:.2f}' for x in pa) if pa else '-'
                 pas = '/'.join(f'{np.sqrt(2) * x:.2f}' for x in pa) if pa else '-'
                 row = (f'| {ss} | {sea.hs_m:.2f} | {sea.tp_s:.1f} | {name} | {kn:.0f} | '
