@@ -81,7 +81,7 @@ class ShipConfig:
     `wind_from_deg` (true, from North clockwise). In paper mode the MMG ship also feels
     seed 002's box-ship forces of a regular wave (`box_ship_waves.py`).
     """
-    mode: Literal['paper', 'spectral'] = 'paper'
+    mode: Literal['paper', 'spectral'] = 'spectral'   # the seed scenarios set 'paper' explicitly
     sea_state: int = 4
     speed_kn: float = 10.0
     heading_deg: float = 30.0
