@@ -5,8 +5,27 @@ run time; the default (vm15 + kf) is the 15-state velocity-matching Kalman filte
 
 Events at equal stamps run IMU first, then LDV, then master: the IMU sample stamped t ends
 the interval at t, so the slave solution is at t when the master sample at t is matched.
-Initialisation (first master sample): the slave copies the master attitude (times the
-nominal mounting), velocity and position at its lever arm. Lever-arm treatment
+
+Time of validity (validity_time.py): master data stamped t are valid at t_v = t -
+`master_latency_s`, LDV data at their stamp - `ldv_latency_s` (the latencies the user
+knows; sensor_timing.py stamps data valid at t as t + latency). A master sample waits until
+the slave has reached t_v and the LDV has a sample at or after t_v, then is matched against
+the slave solution at t_v (kept for the last IMU steps, interpolated between them) and the
+LDV at t_v (interpolated between its samples, so master and LDV may run at different rates;
+an LDV slower than the master has its noise weighted once per LDV interval). With zero
+latencies and equal rates this is today's match at equal stamps, operation for operation.
+The update at a past time: the innovation uses the slave at t_v, while the filter's error
+state is the live one at t_ins; over the few IMU steps in between x(t_ins) = Phi x(t_v) (the
+product of the stored transitions; process noise over the latency neglected), so the
+measurement matrix is H Phi^-1 (delay-aware H). Phi differs from I by ~ f h (g 20 ms phi:
+2e-5 m/s per 0.3' of tilt at 20 ms), so applying H itself would also do at these latencies;
+H Phi^-1 stays right at larger ones. The correction is fed back into the live solution and,
+identically, into the stored past ones. Not matched in time: the Doppler radar (by stamp).
+
+Initialisation (first master sample): the slave copies the master attitude times the
+nominal mounting on the deck (`heading_on_deck_deg`: C_a^s = Rz(-heading)), velocity and
+position at its lever arm, at the master's validity time; IMU samples already received
+after it are replayed. Lever-arm treatment
 (`lever_arm_treatment`, seed 002): `compensation` (default) puts C_m (w_m x r) into the
 reference; `none` leaves it out; `butterworth` leaves it out and low-pass filters the velocity
 difference (filters/lowpass.py: a lag the error model does not contain). The aircraft is
@@ -14,10 +33,22 @@ parked (zero deck velocity, surveyed spot) until the LDV sees it move; from then
 displacement is the integral of the LDV velocity. Closed loop: each update is fed back into
 the strapdown (the model's `feedback`).
 
-Published misalignment (the model's `misalignment`): mu_hat = log(C_m^n^T C_a^n_hat), the
-aircraft IMU axes relative to the master's (aircraft FLU axes), or the mounting state for
-seed003; evaluated at each matching update and held once matching stops (aircraft off the
-deck); its 1-sigma from the covariance, in aircraft axes.
+Published misalignment (the model's `misalignment`): mu_hat = log((C_m^n C_nom)^T C_a^n_hat),
+the aircraft IMU axes relative to the master's turned by the nominal heading on deck
+(aircraft FLU axes), or the mounting state for seed003; evaluated at each matching update
+(master and slave at the same validity time) and held once matching stops (aircraft off the
+deck); its 1-sigma from the covariance, in aircraft axes. Outputs are emitted at master
+stamps, every `output_rate_hz` period from the first.
+
+Numerical breakdown (a LinAlgError or non-finite value in predict or update, a non-finite or
+non-positive variance after an update, or a non-finite output): counted
+(`numerical_failures`), and the filter stops; the last good estimate is published from then
+on with healthy=False while the slave runs free inertial (a node keeps running).
+
+Known-event process noise (`launch_accel_noise_mps2`, off by default): white velocity noise of
+that density on the velocity states for `launch_noise_s` after the LDV detects the launch,
+so the covariance covers the release shock and nose-gear vibration the model lacks.
+`stf_lambda_max` caps the strong tracking factor(s).
 
 Algorithms x models (config validation rejects the other combinations with a message):
 
@@ -45,6 +76,7 @@ equal stamps; each valid sample stamped at an IMU instant is matched (models/see
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -68,9 +100,11 @@ from .filters import (
 )
 from .filters.lowpass import ButterworthLowPass
 from .models import DOPPLER_MODELS, NONLINEAR_MODELS, Corrections, Match, Propagation, make_model
+from .models.base import DV
 from .samples import ImuSample, LdvSample, MasterSample
-from .strapdown import NavState, Strapdown, quat_to_dcm
+from .strapdown import NavState, Strapdown, quat_mul, quat_to_dcm
 from .sync import StampMerger
+from .validity_time import LdvHistory, LdvRecord, SlaveHistory
 
 STREAMS = ('imu', 'ldv', 'master')
 DOPPLER_STREAMS = ('imu', 'ldv', 'doppler', 'master')   # seed001_13: the Doppler radar too
@@ -122,6 +156,12 @@ class FilterConfig:
     output_rate_hz: float = 10.0
     gate_chi2: float = 0.0
     max_gap_factor: float = 1.5
+    heading_on_deck_deg: float = 0.0          # nominal aircraft heading on deck (from the bow, clockwise)
+    master_latency_s: float = 0.0             # known latency: /master/odom data are valid at stamp - latency
+    ldv_latency_s: float = 0.0                # the same for /ldv/twist
+    stf_lambda_max: float = 1e6               # cap on the strong tracking fading factor(s)
+    launch_accel_noise_mps2: float = 0.0      # velocity noise density (m/s^2/sqrt(Hz)) after the launch
+    launch_noise_s: float = 1.0               # ... for this long after the LDV detects it
 
     def validate(self) -> None:
         for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
@@ -132,6 +172,14 @@ class FilterConfig:
                   'master_velocity_sigma_mps', 'gate_chi2'):
             require(getattr(self, k) >= 0.0, f"{k} must be >= 0, got {getattr(self, k)}")
         require(self.max_gap_factor > 1.0, f"max_gap_factor must be > 1, got {self.max_gap_factor}")
+        require(-180.0 <= self.heading_on_deck_deg <= 180.0,
+                f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
+        for k in ('master_latency_s', 'ldv_latency_s'):
+            require(0.0 <= getattr(self, k) <= 1.0, f"{k} must be in [0, 1] s, got {getattr(self, k)}")
+        require(self.stf_lambda_max >= 1.0, f"stf_lambda_max must be >= 1, got {self.stf_lambda_max}")
+        require(self.launch_accel_noise_mps2 >= 0.0,
+                f"launch_accel_noise_mps2 must be >= 0 (0 = off), got {self.launch_accel_noise_mps2}")
+        require(0.0 < self.launch_noise_s <= 600.0, f"launch_noise_s must be in (0, 600], got {self.launch_noise_s}")
         require(0.0 < self.stf_rho <= 1.0, f"stf_rho must be in (0, 1], got {self.stf_rho}")
         require(self.stf_beta >= 1.0, f"stf_beta must be >= 1, got {self.stf_beta}")
         require(all(a >= 1.0 for a in self.stf_alpha), f"stf_alpha must all be >= 1, got {self.stf_alpha}")
@@ -182,6 +230,7 @@ class Estimate:
     updates: int
     matching: bool
     fading: float | np.ndarray = 1.0  # last fading factor(s) of a fading / strong tracking filter
+    healthy: bool = True              # False after a numerical breakdown: the last good estimate, held
 
 
 @dataclass
@@ -197,6 +246,8 @@ class Counters:
     skipped_before_init: int = 0
     doppler: int = 0
     doppler_updates: int = 0
+    unmatched_master: int = 0         # master samples with no slave solution at their validity time
+    numerical_failures: int = 0       # breakdowns of the filter (non-finite or non-PD covariance)
     extra: dict = field(default_factory=dict)
 
 
@@ -211,13 +262,15 @@ def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray, kinds: tuple[
     if a == 'kf':
         return KalmanFilter(x0, p0, dtype=dtype)
     if a == 'stf':
-        return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, dtype=dtype)
+        return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, lam_max=cfg.stf_lambda_max,
+                                    dtype=dtype)
     if a == 'stf_multiple':
         if kinds is None:
             alpha = np.repeat(np.asarray(cfg.stf_alpha), 3)[:len(x0)]
         else:
             alpha = np.asarray(cfg.stf_alpha)[np.asarray(kinds)]
-        return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, alpha=alpha, dtype=dtype)
+        return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, alpha=alpha,
+                                    lam_max=cfg.stf_lambda_max, dtype=dtype)
     if a == 'fading':
         return FadingMemoryFilter(x0, p0, lam=cfg.fading_factor, dtype=dtype)
     if a == 'fading_tested':
@@ -240,6 +293,10 @@ def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray, kinds: tuple[
 def _finite(*arrays) -> bool:
     """True if every element is finite (a NaN or inf anywhere makes the sum non-finite)."""
     return math.isfinite(sum(map(np.sum, arrays)))
+
+
+class NumericalBreakdownError(Exception):
+    """The filter's covariance or state stopped being finite and positive definite."""
 
 
 class TransferAlignment:
@@ -266,11 +323,34 @@ class TransferAlignment:
             self.lowpass = ButterworthLowPass(cfg.butterworth_cutoff_hz, imu_rate_hz)
         self.R_moving = np.eye(3) * (cfg.ldv_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
         self.R_parked = np.eye(3) * (cfg.parked_velocity_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
+        # nominal mounting on the deck: C_a^s = Rz(-heading on deck) (None: the identity)
+        psi = cfg.heading_on_deck_deg * DEG
+        self.c_nom = None if psi == 0.0 else Rotation.from_rotvec([0.0, 0.0, -psi]).as_matrix()
+        # time of validity (validity_time.py): data valid at stamp - latency
+        self.master_lat_ns = int(round(cfg.master_latency_s * 1e9))
+        self.ldv_lat_ns = int(round(cfg.ldv_latency_s * 1e9))
+        self.delay_ns = 0                      # the delay state's estimate, added to master_lat_ns
+        span = max(self.master_lat_ns, self.ldv_lat_ns) + int(0.2e9)
+        self.span_ns = span
+        self.max_step_ns = int(cfg.max_gap_factor * self.imu_dt_nominal * 1e9)
+        self.history = SlaveHistory(span)
+        self.ldv_history = LdvHistory(span, cfg.ldv_sigma_mps)
+        self.imu_buffer: deque[ImuSample] = deque()       # IMU samples before initialisation
+        self.pending: deque[tuple[int, MasterSample]] = deque()
+        self.t_last_match: int | None = None
+        self.t_master: int | None = None          # last master stamp, and the spacing of the last two
+        self.master_spacing_ns = 0
+        # known-event process noise after the launch (velocity states)
+        self.t_launch: int | None = None
+        self.launch_ns = int(round(cfg.launch_noise_s * 1e9))
+        dv = np.array([k == DV for k in self.model.kinds], dtype=float)
+        self.q_launch = np.diag(dv) * cfg.launch_accel_noise_mps2 ** 2 if cfg.launch_accel_noise_mps2 > 0.0 else None
         self.moving = False
         self.ins: Strapdown | None = None
         self.kf: KalmanFilter | None = None
         self.t_ins: int | None = None
         self.t0: int | None = None
+        self.next_out: int | None = None
         self.corr = Corrections()
         self.deck_disp = np.zeros(3)
         self.last_ldv: LdvSample | None = None
@@ -280,6 +360,9 @@ class TransferAlignment:
         self.last_nis = math.nan
         self.matching = False
         self.t_doppler_update: int | None = None
+        self.healthy = True
+        self.failure: str = ''
+        self.held: tuple[np.ndarray, np.ndarray, dict] | None = None   # (attitude cov, sigma, diagnostics)
         self.outputs: list[Estimate] = []
 
     @property
@@ -323,18 +406,51 @@ class TransferAlignment:
         events = self.merger.flush() if final else self.merger.pop_ready()
         for stream, t, item in events:
             getattr(self, '_on_' + stream)(t, item)
+        if final:
+            self._match_pending(final=True)
         return self.outputs[n0:]
 
     def filter_diagnostics(self) -> dict:
         """The filter's own diagnostics (nis, updates, gated, fading factor(s) if it fades)."""
+        if self.held is not None:
+            return dict(self.held[2])
         return {} if self.kf is None else self.kf.diagnostics()
+
+    # ----- numerical health -----
+    def _fail(self, why: str) -> None:
+        """Stop filtering after a breakdown: keep the last good estimate (published with
+        healthy=False) and let the slave run free inertial."""
+        self.counters.numerical_failures += 1
+        if self.healthy:
+            self.healthy = False
+            self.failure = why
+            self.matching = False
+
+    def _check_health(self) -> None:
+        """Raise NumericalBreakdownError unless x is finite and P has a finite, positive diagonal
+        (a Cholesky of every P would cost more than the update; a negative or non-finite
+        variance is how single-precision breakdowns show first)."""
+        d = np.diagonal(self.kf.P)
+        if not (_finite(self.kf.x, d) and bool(np.all(d > 0.0))):
+            raise NumericalBreakdownError('covariance not positive definite or not finite')
 
     # ----- events -----
     def _on_imu(self, t: int, s: ImuSample) -> None:
         self.counters.imu += 1
-        if self.ins is None or t <= self.t_ins:
+        if self.ins is None:
+            self.imu_buffer.append(s)
+            while self.imu_buffer and self.imu_buffer[0].t_ns < t - self.span_ns:
+                self.imu_buffer.popleft()
+                self.counters.skipped_before_init += 1
+            return
+        if t <= self.t_ins:
             self.counters.skipped_before_init += 1
             return
+        self._propagate(t, s)
+        if self.pending:
+            self._match_pending()
+
+    def _propagate(self, t: int, s: ImuSample) -> None:
         h = (t - self.t_ins) * 1e-9
         if h > self.cfg.max_gap_factor * self.imu_dt_nominal:
             self.counters.imu_gaps += 1
@@ -342,40 +458,65 @@ class TransferAlignment:
         dth = (s.gyro - bg) * h
         dv = (s.accel - ba) * h
         ins = self.ins
+        snap = self.history.record(self.t_ins, ins.s)
         f_n = ins.update(dth, dv, h)
         st = ins.s
-        p = Propagation(ins.c_start, f_n, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
-        if self.model.nonlinear:
-            fun, jac = self.model.propagator(p)
-            self.kf.predict_nonlinear(fun, self.model.process_noise(h), jac)
-        else:
-            self.kf.predict(self.model.transition(p), self.model.process_noise(h))
         self.t_ins = t
+        self.history.prune(t - self.span_ns, t)
+        if not self.healthy:
+            return
+        p = Propagation(ins.c_start, f_n, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
+        qd = self.model.process_noise(h)
+        if self.q_launch is not None and self.t_launch is not None and t - self.t_launch <= self.launch_ns \
+                and t > self.t_launch:
+            qd = qd + self.q_launch * h
+        try:
+            if self.model.nonlinear:
+                fun, jac = self.model.propagator(p)
+                self.kf.predict_nonlinear(fun, qd, jac)
+            else:
+                phi = self.model.transition(p)
+                snap.phi = phi
+                self.kf.predict(phi, qd)
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError) as e:
+            self._fail(f'predict: {e}')
 
     def _on_ldv(self, t: int, s: LdvSample) -> None:
         """Parked (held back) until the LDV first reads more than `launch_detect_mps`: until
         then the aircraft's deck velocity is zero and its spot fixed, so LDV noise is neither
         integrated into the lever arm (a random walk of ~2 cm over 300 s, which through
-        w' x dr looks like tens of ug) nor added to the reference velocity."""
+        w' x dr looks like tens of ug) nor added to the reference velocity. Each sample is
+        kept by its validity time (stamp - ldv_latency_s) for the master's lookup."""
         self.counters.ldv += 1
+        t_v = t - self.ldv_lat_ns
         prev = self.last_ldv
         if s.valid and not self.moving and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps:
             self.moving = True
+            self.t_launch = t_v
         if self.moving and s.valid and prev is not None and prev.valid:
-            self.deck_disp += 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
+            self.deck_disp = self.deck_disp + 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
         self.last_ldv = s
+        self.ldv_history.record(LdvRecord(t_v, s.v_s, s.valid, self.moving, self.deck_disp))
+        if self.pending:
+            self._match_pending()
 
     def _on_doppler(self, t: int, s: DopplerSample) -> None:
-        """Match the slave velocity to the radar's, resolved with the slave's own attitude."""
+        """Match the slave velocity to the radar's, resolved with the slave's own attitude
+        (matched by stamp: a sample stamped at an IMU instant)."""
         self.counters.doppler += 1
-        if self.ins is None or not s.valid or t != self.t_ins:
+        if self.ins is None or not s.valid or t != self.t_ins or not self.healthy:
             return
         st = self.ins.s
         v_d = quat_to_dcm(st.q_nb) @ s.v_b
         r = np.eye(2) * s.sigma ** 2
         meas = self.model.doppler_measurement(st.v_n, (st.v_n - v_d)[0:2], r)
         gate = self.cfg.gate_chi2 if self.cfg.gate_chi2 > 0.0 else None
-        res = self.kf.update(meas.z, meas.h, meas.r, gate)
+        try:
+            res = self.kf.update(meas.z, meas.h, meas.r, gate)
+            self._check_health()
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError, NumericalBreakdownError) as e:
+            self._fail(f'update: {e}')
+            return
         self.last_nis = res.nis
         if not res.accepted:
             self.counters.gated += 1
@@ -388,57 +529,116 @@ class TransferAlignment:
         self.kf.x = self.model.feedback(x, self.kf.P, match, st, self.corr)
         self.t_doppler_update = t
 
-    def _lever_arm(self) -> np.ndarray:
+    def _lever_arm(self, deck_disp: np.ndarray) -> np.ndarray:
         """The lever arm put into the reference (ship axes): the surveyed spot (plus the
         estimated correction) under compensation, and the LDV-integrated deck displacement."""
         if not self.compensate:
-            return self.deck_disp
+            return deck_disp
         if self.cfg.lever_arm_states:
-            return self.r0 + self.corr.dr + self.deck_disp
-        return self.r0 + self.deck_disp
+            return self.r0 + self.corr.dr + deck_disp
+        return self.r0 + deck_disp
 
     def _on_master(self, t: int, m: MasterSample) -> None:
+        """Queue the sample at its validity time; match it once the slave and the LDV have
+        reached that time (at once when nothing is late); emit at the output rate."""
         self.counters.master += 1
+        if self.t0 is None:
+            self.t0 = self.next_out = t
+        if self.t_master is not None:
+            self.master_spacing_ns = t - self.t_master
+        self.t_master = t
+        self.pending.append((t - self.master_lat_ns - self.delay_ns, m))
+        self._match_pending()
+        if self.ins is not None and t >= self.next_out:
+            self._emit(t)
+            self.next_out += self.out_period_ns * (1 + (t - self.next_out) // self.out_period_ns)
+
+    def _match_pending(self, final: bool = False) -> None:
+        while self.pending:
+            t_v, m = self.pending[0]
+            if not final:
+                latest = self.ldv_history.latest_ns
+                if latest is None or latest < t_v or (self.ins is not None and self.t_ins < t_v):
+                    return
+            self.pending.popleft()
+            self._match(t_v, m)
+
+    def _match(self, t_v: int, m: MasterSample) -> None:
+        """The master sample valid at t_v against the LDV and the slave solution at t_v."""
         c_m = quat_to_dcm(m.q_nb)
-        r = self._lever_arm()
-        ldv = self.last_ldv if (self.last_ldv is not None and self.last_ldv.t_ns == t) else None
-        v_rel = ldv.v_s if (ldv is not None and ldv.valid and self.moving) else np.zeros(3)
+        ldv = self.ldv_history.at(t_v)
+        moving = ldv is not None and ldv.moving
+        r = self._lever_arm(ldv.disp if ldv is not None else self.deck_disp)
+        v_rel = ldv.v_s if (ldv is not None and ldv.valid and moving) else np.zeros(3)
         u_n = c_m @ (cross3(m.w_b, r) + v_rel)
         v_ref = c_m @ m.v_b + u_n
         if self.ins is None:
-            self._initialise(t, m, c_m, r, v_ref)
-        elif ldv is not None and ldv.valid and t == self.t_ins:
-            self._update(c_m, m, r, v_ref, u_n)
-            self.matching = True
-        else:
-            self.matching = self.t_doppler_update == t
-        if (t - self.t0) % self.out_period_ns == 0:
-            self._emit(t)
+            self._initialise(t_v, m, c_m, r, v_ref)
+            return
+        if ldv is None or not ldv.valid or not self.healthy:
+            self.matching = self.healthy and self.t_doppler_update == m.t_ns
+            return
+        past = self.history.state_at(t_v, self.ins.s, self.t_ins, self.max_step_ns)
+        if past is None:
+            self.counters.unmatched_master += 1
+            self.matching = False
+            return
+        try:
+            r_vel = self.R_moving if moving else self.R_parked
+            if moving:
+                # an LDV slower than the master enters several matches with the same noise:
+                # weight it as one sample per LDV interval (variance times the matches per sample)
+                ratio = self.ldv_history.spacing_ns / self.master_spacing_ns if self.master_spacing_ns else 1.0
+                extra = ldv.var + (ratio - 1.0) * self.cfg.ldv_sigma_mps ** 2 if ratio > 1.0 else ldv.var
+                if extra > 0.0:
+                    r_vel = r_vel + np.eye(3) * extra
+            self._update(t_v, c_m, m, r, v_ref, u_n, past, r_vel)
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError, NumericalBreakdownError) as e:
+            self._fail(f'update: {e}')
+            return
+        self.matching = True
 
-    def _initialise(self, t, m, c_m, r, v_ref) -> None:
+    def _initialise(self, t_v: int, m: MasterSample, c_m: np.ndarray, r: np.ndarray, v_ref: np.ndarray) -> None:
+        """Slave = master attitude (times the nominal mounting), velocity and position at the lever
+        arm, at the master's validity time; IMU samples already received after it are replayed."""
         lat, lon, h = self.plane.to_geodetic(m.p_w + self.plane.c_local_to_world(m.p_w) @ (c_m @ r))
-        q = Rotation.from_matrix(c_m).as_quat()
+        c_a = c_m if self.c_nom is None else c_m @ self.c_nom
+        q = Rotation.from_matrix(c_a).as_quat()
         self.ins = Strapdown(NavState(q_nb=q, v_n=v_ref.copy(), lat=float(lat), lon=float(lon),
                                       h=float(h)))
         self.kf = make_filter(self.cfg, np.zeros(self.n), self.model.initial_covariance(), self.model.kinds)
-        self.t_ins = t
-        self.t0 = t
+        self.t_ins = t_v
+        buffered, self.imu_buffer = self.imu_buffer, deque()
+        for s in buffered:
+            if s.t_ns > self.t_ins:
+                self._propagate(s.t_ns, s)
+            else:
+                self.counters.skipped_before_init += 1
 
-    def _update(self, c_m: np.ndarray, m: MasterSample, r: np.ndarray, v_ref: np.ndarray,
-                u_n: np.ndarray) -> None:
-        st = self.ins.s
-        z_vel = st.v_n - v_ref
+    def _update(self, t_v: int, c_m: np.ndarray, m: MasterSample, r: np.ndarray, v_ref: np.ndarray,
+                u_n: np.ndarray, past: tuple[NavState, np.ndarray | None], r_vel: np.ndarray) -> None:
+        """Velocity (+ attitude) match at t_v. The innovation is formed against the slave solution
+        at t_v; the error state is the live one (at t_ins), related to the one at t_v by the
+        transitions in between, x(t_ins) = Phi x(t_v) (process noise over the latency neglected),
+        so the measurement matrix is H Phi^-1 (identity at zero latency). The estimate is fed
+        back into the live solution, and the same correction into the stored past ones."""
+        nav, phi_acc = past
+        live = self.ins.s
+        z_vel = nav.v_n - v_ref
         if self.lowpass is not None:
             z_vel = self.lowpass.step(z_vel)
         match = Match(c_m=c_m, w_m=m.w_b, r=r, u_n=u_n, v_ref=v_ref, z_vel=z_vel,
-                      r_vel=self.R_moving if self.moving else self.R_parked, ins=st)
+                      r_vel=r_vel, ins=nav, c_nom=self.c_nom)
         meas = self.model.measurement(match, self.corr)
         gate = self.cfg.gate_chi2 if self.cfg.gate_chi2 > 0.0 else None
         if meas.h is None:
             res = self.kf.update_nonlinear(meas.z, meas.hfun, meas.r, gate)
         else:
-            res = self.kf.update(meas.z, meas.h, meas.r, gate)
+            h = meas.h if phi_acc is None else np.linalg.solve(phi_acc.T, meas.h.T).T
+            res = self.kf.update(meas.z, h, meas.r, gate)
+        self._check_health()
         self.last_nis = res.nis
+        self.t_last_match = t_v
         if not res.accepted:
             self.counters.gated += 1
             return
@@ -446,19 +646,45 @@ class TransferAlignment:
         x = self.kf.x
         self.last_x = x.copy()
         p = self.kf.P
-        v_before = st.v_n
-        x_new = self.model.feedback(x, p, match, st, self.corr)
+        q0, v0, pos0 = live.q_nb, live.v_n, (live.lat, live.lon, live.h)
+        x_new = self.model.feedback(x, p, match, live, self.corr)
         if self.lowpass is not None:
-            self.lowpass.shift(st.v_n - v_before)
+            self.lowpass.shift(live.v_n - v0)
+        if self.history.items or nav is not live:
+            q_corr = quat_mul(live.q_nb, np.array([-q0[0], -q0[1], -q0[2], q0[3]]))
+            dv = live.v_n - v0
+            dpos = (live.lat - pos0[0], live.lon - pos0[1], live.h - pos0[2])
+            self.history.correct(q_corr, dv, *dpos)
+            if nav is not live:
+                q = quat_mul(q_corr, nav.q_nb)
+                nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + dv, lat=nav.lat + dpos[0],
+                               lon=nav.lon + dpos[1], h=nav.h + dpos[2])
         self.kf.x = x_new
-        self.mu, self.mu_sigma = self.model.misalignment(x_new, p, match, st, self.corr)
+        self.mu, self.mu_sigma = self.model.misalignment(x_new, p, match, nav, self.corr)
+        self.history.prune(t_v, self.t_ins)
 
     def _emit(self, t: int) -> None:
         st = self.ins.s
-        att = self.model.attitude
-        fading = self.kf.diagnostics().get('fading', 1.0)
+        if self.healthy:
+            att = self.model.attitude
+            diag = self.kf.diagnostics()
+            fading = diag.get('fading', 1.0)
+            p = self.kf.P
+            cov, sigma = p[att, att].copy(), np.sqrt(np.diag(p))
+            if not (_finite(cov, sigma) and _finite(self.mu, self.mu_sigma)):
+                self._fail('covariance not finite at the output')
+            else:
+                self.held = (cov, sigma, diag)
+        if not self.healthy:
+            if self.held is None:
+                att = self.model.attitude
+                p0 = self.model.initial_covariance()
+                self.held = (p0[att, att].copy(), np.sqrt(np.diag(p0)), {})
+            cov, sigma, diag = self.held
+            fading = diag.get('fading', 1.0)
         self.outputs.append(Estimate(
             t_ns=t, misalignment=self.mu.copy(), misalignment_sigma=self.mu_sigma.copy(),
-            q_nb=st.q_nb.copy(), attitude_cov=self.kf.P[att, att].copy(), x=self.last_x.copy(),
-            sigma=np.sqrt(np.diag(self.kf.P)), bias_gyro=self.bg.copy(), bias_accel=self.ba.copy(),
-            nis=self.last_nis, updates=self.counters.updates, matching=self.matching, fading=fading))
+            q_nb=st.q_nb.copy(), attitude_cov=cov, x=self.last_x.copy(),
+            sigma=sigma, bias_gyro=self.bg.copy(), bias_accel=self.ba.copy(),
+            nis=self.last_nis, updates=self.counters.updates, matching=self.matching, fading=fading,
+            healthy=self.healthy))

@@ -55,7 +55,10 @@ class Match:
     """One matching instant: the master-derived reference for the slave and what it took.
 
     z_vel is the velocity difference v_slave - v_ref after the lever-arm treatment (the
-    Butterworth output under `lever_arm_treatment: butterworth`); r_vel its noise covariance."""
+    Butterworth output under `lever_arm_treatment: butterworth`); r_vel its noise covariance.
+    Everything is at the master sample's time of validity (the slave solution `ins` too).
+    c_nom: the aircraft's nominal mounting on the deck, C_a^s = Rz(-heading on deck); the
+    misalignment is reported relative to C_m c_nom (`nominal_attitude`)."""
     c_m: np.ndarray         # master attitude as reported (nav <- ship body)
     w_m: np.ndarray         # master body rate w.r.t. nav (ship axes)
     r: np.ndarray           # lever arm used in the reference (ship axes)
@@ -63,7 +66,8 @@ class Match:
     v_ref: np.ndarray       # master velocity + u_n
     z_vel: np.ndarray       # (3,) velocity difference used as measurement
     r_vel: np.ndarray       # (3, 3) its white-noise covariance
-    ins: NavState           # the slave solution at this instant
+    ins: NavState           # the slave solution at this instant (its time of validity)
+    c_nom: np.ndarray | None = None   # nominal aircraft axes in ship axes (heading on deck); None = I
 
 
 @dataclass
@@ -141,6 +145,11 @@ class ErrorModel:
         vector, aircraft axes, rad) and its 1-sigma, after feedback; x is the residual state
         feedback() returned, p the covariance after the update."""
         raise NotImplementedError
+
+
+def nominal_attitude(m: Match) -> np.ndarray:
+    """C_m c_nom: the aircraft attitude the master predicts with zero misalignment."""
+    return m.c_m if m.c_nom is None else m.c_m @ m.c_nom
 
 
 def skew_into(m: np.ndarray, r: int, c: int, v: np.ndarray) -> None:

@@ -31,7 +31,18 @@ from ..attitude import DEG, skew
 from ..attitude import rotvec_to_dcm_small as rotation
 from ..deck_flexure import right_jacobian
 from ..strapdown import NavState, quat_mul, quat_to_dcm, rotvec_to_quat
-from .base import DV, PHI, Corrections, ErrorModel, Match, Measurement, Propagation, relative_misalignment, skew_into
+from .base import (
+    DV,
+    PHI,
+    Corrections,
+    ErrorModel,
+    Match,
+    Measurement,
+    Propagation,
+    nominal_attitude,
+    relative_misalignment,
+    skew_into,
+)
 from .velocity_matching import attitude_variances, noise_densities
 
 LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dV_U')
@@ -89,7 +100,7 @@ class Seed000Linear(ErrorModel):
         c_na = quat_to_dcm(nav.q_nb)
         if np.any(x[0:3]):
             c_na = rotation(x[0:3]) @ c_na
-        return relative_misalignment(m.c_m, c_na, p[0:3, 0:3])
+        return relative_misalignment(nominal_attitude(m), c_na, p[0:3, 0:3])
 
 
 class Seed000LargeAngle(Seed000Linear):

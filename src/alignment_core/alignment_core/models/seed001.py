@@ -60,6 +60,7 @@ from .base import (
     Match,
     Measurement,
     Propagation,
+    nominal_attitude,
     relative_misalignment,
     skew_into,
 )
@@ -200,4 +201,4 @@ class Seed001Doppler(ErrorModel):
         return x_new
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
-        return relative_misalignment(m.c_m, quat_to_dcm(nav.q_nb), p[0:3, 0:3])
+        return relative_misalignment(nominal_attitude(m), quat_to_dcm(nav.q_nb), p[0:3, 0:3])

@@ -24,7 +24,19 @@ import numpy as np
 from ..attitude import DPH
 from ..sensors import UG
 from ..strapdown import NavState, quat_mul, quat_to_dcm, rotvec_to_quat
-from .base import DV, EPS, NABLA, PHI, Corrections, ErrorModel, Match, Measurement, Propagation, relative_misalignment
+from .base import (
+    DV,
+    EPS,
+    NABLA,
+    PHI,
+    Corrections,
+    ErrorModel,
+    Match,
+    Measurement,
+    Propagation,
+    nominal_attitude,
+    relative_misalignment,
+)
 from .velocity_matching import attitude_variances, continuous, noise_densities
 
 LABELS = ('dV_E', 'dV_N', 'phi_E', 'phi_N', 'phi_U', 'nabla_x', 'nabla_y', 'eps_x', 'eps_y', 'eps_z')
@@ -74,4 +86,4 @@ class Seed002Horizontal(ErrorModel):
         return np.zeros(10)
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
-        return relative_misalignment(m.c_m, quat_to_dcm(nav.q_nb), p[2:5, 2:5])
+        return relative_misalignment(nominal_attitude(m), quat_to_dcm(nav.q_nb), p[2:5, 2:5])

@@ -43,7 +43,20 @@ from ..attitude import ARCMIN, DEG, DPH, dcm_to_rotvec_small, rotvec_to_dcm_smal
 from ..deck_flexure import BETA_TAU, gm2_discrete
 from ..sensors import UG
 from ..strapdown import NavState, quat_mul, quat_to_dcm, rotvec_to_quat
-from .base import DV, EPS, NABLA, OTHER, PHI, Corrections, ErrorModel, Match, Measurement, Propagation, skew_into
+from .base import (
+    DV,
+    EPS,
+    NABLA,
+    OTHER,
+    PHI,
+    Corrections,
+    ErrorModel,
+    Match,
+    Measurement,
+    Propagation,
+    nominal_attitude,
+    skew_into,
+)
 from .velocity_matching import LABELS as VM_LABELS
 from .velocity_matching import (
     MASTER_LABELS,
@@ -131,8 +144,8 @@ class Seed003VelocityAttitude(ErrorModel):
         return qd
 
     def reference_attitude(self, m: Match, corr: Corrections) -> np.ndarray:
-        """C = C_m,est exp([mu_est x]): the aircraft attitude predicted from the master."""
-        return m.c_m @ rotvec_to_dcm_small(corr.mu)
+        """C = C_m,est c_nom exp([mu_est x]): the aircraft attitude predicted from the master."""
+        return nominal_attitude(m) @ rotvec_to_dcm_small(corr.mu)
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
         n = self._n

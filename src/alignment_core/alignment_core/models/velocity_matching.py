@@ -41,6 +41,7 @@ from .base import (
     Match,
     Measurement,
     Propagation,
+    nominal_attitude,
     relative_misalignment,
 )
 
@@ -189,10 +190,10 @@ class VelocityMatching(ErrorModel):
         return x_new
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
-        """log(C_m^T C_a) with, for vm15, C_m corrected by phi_m (C_m = (I + [phi_m x]) C_m,est)
+        """log((C_m c_nom)^T C_a) with, for vm15, C_m corrected by phi_m (C_m = (I + [phi_m x]) C_m,est)
         and the sigma of phi - phi_m."""
         c_na = quat_to_dcm(nav.q_nb)
-        c_m = m.c_m
+        c_m = nominal_attitude(m)
         if self._n == 15:
             c_m = rotvec_to_dcm_small(x[12:15]) @ c_m
             p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
