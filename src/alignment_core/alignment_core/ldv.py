@@ -3,8 +3,8 @@
 v_meas = (I + diag(k)) v_rel + b + n, n white (noise_mps), k and b random constants per axis
 (1-sigma scale_ppm, bias_mps; stream stage_rng(seed, 'ldv_errors')). No measurement
 (valid = False, published with covariance[0] = -1) when the aircraft is outside the beam
-along the catapult track, farther than max_range_m from the LDV head, faster than
-max_speed_mps relative to the deck, or in a dropout. Dropouts: a two-state Markov process,
+along the catapult track (at `track_heading_deg` from the bow), farther than max_range_m from
+the LDV head, faster than max_speed_mps relative to the deck, or in a dropout. Dropouts: a two-state Markov process,
 starts at rate dropout_rate_hz (per second of valid time), exponential durations of mean
 dropout_mean_s; fraction of time in dropout p = r d / (1 + r d); stepped exactly between
 samples (stream 'ldv_dropout', stationary start). Own rate and latency: sensor_timing.
@@ -28,11 +28,14 @@ from .sensor_timing import SensorTiming
 @dataclass(frozen=True)
 class LdvConfig:
     """Laser Doppler velocimeter (seed 000: 0.01 m/s). Its beam runs along the catapult track
-    (ship x axis) from `origin_m` (the aircraft's start spot, ship axes); it measures while the
-    aircraft is within `track_length_m` along the track and `beam_halfwidth_m` across it.
+    from `origin_m` (the aircraft's start spot, ship axes), in the direction `track_heading_deg`
+    from the bow, clockwise (the aircraft's heading on deck, which the scenario gives it by
+    default: u = (cos psi, -sin psi, 0) in ship FLU axes); it measures while the aircraft is
+    within `track_length_m` along the track and `beam_halfwidth_m` across it.
     The LDV head sits `head_offset_m` along the track from `origin_m` (negative: behind)."""
     noise_mps: float = 0.01
     origin_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
+    track_heading_deg: float = 0.0
     track_length_m: float = 95.0
     beam_halfwidth_m: float = 2.0
     bias_mps: float = 0.0              # 1-sigma random constant per axis
@@ -48,6 +51,8 @@ class LdvConfig:
     def validate(self) -> None:
         require(0.0 < self.noise_mps <= 10.0, f"noise_mps must be in (0, 10], got {self.noise_mps}")
         require(self.track_length_m > 0.0, f"track_length_m must be > 0, got {self.track_length_m}")
+        require(-180.0 <= self.track_heading_deg <= 180.0,
+                f"track_heading_deg must be in [-180, 180], got {self.track_heading_deg}")
         require(self.beam_halfwidth_m > 0.0, f"beam_halfwidth_m must be > 0, got {self.beam_halfwidth_m}")
         require(0.0 <= self.bias_mps <= 10.0, f"bias_mps must be in [0, 10], got {self.bias_mps}")
         require(0.0 <= self.scale_ppm <= 1e5, f"scale_ppm must be in [0, 1e5], got {self.scale_ppm}")
@@ -85,7 +90,9 @@ class LdvModel:
             r = stage_rng(seed, 'ldv_errors')
             self.bias = r.standard_normal(3) * cfg.bias_mps
             self.scale = r.standard_normal(3) * cfg.scale_ppm * 1e-6
-        self.head = np.asarray(cfg.origin_m, dtype=float) + np.array([cfg.head_offset_m, 0.0, 0.0])
+        psi = cfg.track_heading_deg * np.pi / 180.0
+        self.track = np.array([np.cos(psi), -np.sin(psi), 0.0]) if psi != 0.0 else np.array([1.0, 0.0, 0.0])
+        self.head = np.asarray(cfg.origin_m, dtype=float) + cfg.head_offset_m * self.track
         self.dropouts = cfg.dropout_rate_hz > 0.0
         if self.dropouts:
             self.drop_rng = stage_rng(seed, 'ldv_dropout')
@@ -122,8 +129,12 @@ class LdvModel:
         c_lw = np.swapaxes(self.plane.c_local_to_world(sb.p_w), -1, -2)  # world -> local ENU
         r = c_ns.apply(np.einsum('kij,kj->ki', c_lw, p_a - sb.p_w))
         d = r - np.asarray(cfg.origin_m)
-        valid = ((d[:, 0] >= -cfg.beam_halfwidth_m) & (d[:, 0] <= cfg.track_length_m)
-                 & (np.hypot(d[:, 1], d[:, 2]) <= cfg.beam_halfwidth_m))
+        if cfg.track_heading_deg == 0.0:
+            along, across = d[:, 0], np.hypot(d[:, 1], d[:, 2])
+        else:
+            along = d @ self.track
+            across = np.linalg.norm(d - along[:, None] * self.track, axis=1)
+        valid = (along >= -cfg.beam_halfwidth_m) & (along <= cfg.track_length_m) & (across <= cfg.beam_halfwidth_m)
         v_a_n = Rotation.from_quat(q_a).apply(v_a_b)
         v_s_n = Rotation.from_quat(sb.q_nb).apply(sb.v_b)
         v_true = c_ns.apply(v_a_n - v_s_n) - cross(sb.w_b, r)

@@ -132,6 +132,11 @@ def from_dict(data: dict, overrides: dict[str, object] | None = None) -> Scenari
         if data['ldv'] is None:
             data['ldv'] = {}
         data['ldv'].setdefault('origin_m', ac['lever_arm_m'])
+    if 'heading_on_deck_deg' in ac:      # the nominal mounting on deck, and the LDV beam along the track
+        for sec, key in (('filter', 'heading_on_deck_deg'), ('ldv', 'track_heading_deg')):
+            if data.get(sec) is None:
+                data[sec] = {}
+            data[sec].setdefault(key, ac['heading_on_deck_deg'])
     cat = ac.get('catapult') or {}
     if cat.get('enabled', True):
         data.setdefault('ldv', {})
