@@ -1,7 +1,9 @@
 """alignment_filter_node: aligns the aircraft INS to the master INS (never reads truth).
 
 Inputs are queued and processed in stamp order by alignment_core's TransferAlignment, so
-its outputs do not depend on how the three streams interleave on arrival.
+its outputs do not depend on how the three streams interleave on arrival. A numerical
+breakdown of the filter does not stop the node: it keeps publishing the last good estimate
+and reports the failure in /diagnostics (level ERROR, `healthy: false`, `numerical_failures`).
 """
 from __future__ import annotations
 
@@ -34,6 +36,7 @@ class AlignmentFilterNode(node_util.CountingNode):
         if self.engine.model.uses_doppler:
             self.create_subscription(TwistWithCovarianceStamped, topics.DOPPLER_TWIST, self.on_doppler, qos.STREAM)
         self.n_out = 0
+        self.reported_failure = False
 
     def on_imu(self, m: Imu) -> None:
         self._accept(topics.AIRCRAFT_IMU, self.engine.push_imu(convert.msg_to_imu(m)), m)
@@ -65,21 +68,29 @@ class AlignmentFilterNode(node_util.CountingNode):
             self.send(topics.ALIGN_MISALIGNMENT, mis)
             self.send(topics.ALIGN_ATTITUDE, att)
             self.send(topics.ALIGN_STATE, st)
-            if self.n_out % 10 == 0:
+            if self.n_out % 10 == 0 or (not e.healthy and not self.reported_failure):
                 self.send(topics.DIAGNOSTICS, self._diagnostics(e))
+            if not e.healthy and not self.reported_failure:
+                self.reported_failure = True
+                self.get_logger().error(f'numerical breakdown ({self.engine.failure}): the filter stopped; '
+                                        f'publishing the last good estimate')
             self.n_out += 1
 
     def _diagnostics(self, e) -> DiagnosticArray:
         c = self.engine.counters
-        bad = c.rejected_nonfinite + c.rejected_out_of_order + c.imu_gaps
+        bad = c.rejected_nonfinite + c.rejected_out_of_order + c.imu_gaps + c.unmatched_master
         level = DiagnosticStatus.OK if bad == 0 else DiagnosticStatus.WARN
         msg = 'aligning' if e.matching else 'free inertial (no matching)'
+        if not e.healthy:
+            level = DiagnosticStatus.ERROR
+            msg = f'numerical breakdown ({self.engine.failure}): last good estimate held, filter stopped'
         return convert.diagnostics(e.t_ns, 'alignment_filter', level, msg, {
             'nis': f'{e.nis:.4g}', 'updates': c.updates, 'gated': c.gated,
             'rejected_nonfinite': c.rejected_nonfinite,
             'rejected_out_of_order': c.rejected_out_of_order, 'imu_gaps': c.imu_gaps,
             'imu': c.imu, 'master': c.master, 'ldv': c.ldv, 'doppler': c.doppler,
-            'doppler_updates': c.doppler_updates,
+            'doppler_updates': c.doppler_updates, 'unmatched_master': c.unmatched_master,
+            'numerical_failures': c.numerical_failures, 'healthy': str(e.healthy).lower(),
             'pending': self.engine.merger.pending(),
             'model': self.engine.model.name, 'states': self.engine.n, 'algorithm': self.sc.filter.algorithm,
             'lever_arm_treatment': self.sc.filter.lever_arm_treatment,
