@@ -1,5 +1,9 @@
 """Replay a recorded run's sensor topics (and /clock) into a fresh alignment filter node,
-record its outputs to a new bag, and write the same summary.json as run_graph."""
+record its outputs to a new bag, and write the same summary.json as run_graph.
+
+Played: /clock, /master/odom, /aircraft/imu, /ldv/twist, and /doppler/twist when the bag has
+it (recorded only with doppler.enabled); the player waits for the filter's subscription to it
+when the filter's model matches the Doppler radar (filter.model in the params)."""
 from __future__ import annotations
 
 import argparse
@@ -10,6 +14,9 @@ import time
 from pathlib import Path
 
 import rclpy
+import yaml
+
+from alignment_core.models import DOPPLER_MODELS
 
 from . import summary, topics
 from .bag import BagError, BagReader
@@ -37,6 +44,20 @@ def _wait_graph(timeout_s: float = 30.0) -> None:
         rclpy.shutdown()
 
 
+def replay_topics(bag_topics, params: Path) -> tuple[list[str], list[str]]:
+    """(topics to play, 'TOPIC=N' subscriptions to wait for): the sensor topics, plus the
+    Doppler radar's when the bag has it; its subscriber is awaited only if the filter's model
+    uses it (the filter node subscribes only then)."""
+    play = list(SENSOR_TOPICS)
+    wait = [f'{topics.AIRCRAFT_IMU}=1', f'{topics.MASTER_ODOM}=1', f'{topics.LDV_TWIST}=1']
+    if topics.DOPPLER_TWIST in bag_topics:
+        play.append(topics.DOPPLER_TWIST)
+        flat = (yaml.safe_load(params.read_text()) or {}).get('/**', {}).get('ros__parameters', {})
+        if flat.get('filter.model') in DOPPLER_MODELS:
+            wait.append(f'{topics.DOPPLER_TWIST}=1')
+    return play, wait
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog='replay.sh', description=__doc__)
     ap.add_argument('bag', type=Path, help='a bag recorded by run_graph.sh (its run directory or bag/)')
@@ -54,6 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         reader = BagReader(bag)
         end_ns = max(m.t_ns for m in reader.messages([topics.MASTER_ODOM]))
+        play_topics, wait = replay_topics(reader.topics(), params)
     except (BagError, ValueError) as e:
         print(f'replay: {e}', file=sys.stderr)
         return 2
@@ -75,9 +97,8 @@ def main(argv: list[str] | None = None) -> int:
         _wait_graph()
         player = subprocess.run(
             [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/player'), str(bag),
-             '--topics', *SENSOR_TOPICS, '--stats', str(out / 'stats' / 'player.json'),
-             '--wait-subscribers', f'{topics.AIRCRAFT_IMU}=1', f'{topics.MASTER_ODOM}=1',
-             f'{topics.LDV_TWIST}=1'],
+             '--topics', *play_topics, '--stats', str(out / 'stats' / 'player.json'),
+             '--wait-subscribers', *wait],
             stdout=open(out / 'logs' / 'player.log', 'w'), stderr=subprocess.STDOUT)
         if player.returncode != 0:
             raise RuntimeError(f'player failed; see {out}/logs/player.log')
