@@ -69,6 +69,22 @@ def test_summary_has_contract_keys_and_no_losses(graph_run):
     assert s['topics']['/truth/misalignment'] == 1101    # on deck until the release at 11 s
 
 
+def test_recorder_waited_for_every_published_message(graph_run):
+    """The recorder stopped because it had every message the nodes report they sent (not
+    after a quiet period), and every node exited only once its subscribers had acknowledged
+    every message it published."""
+    rec = json.loads((graph_run / 'stats' / 'recorder.json').read_text())
+    assert rec['end_reason'] == 'end_time'
+    assert rec['missing'] == {}
+    published = json.loads((graph_run / 'stats' / 'published.json').read_text())
+    assert rec['expected'] == published
+    assert {t: rec['topics'][t] for t in published} == published
+    for f in sorted((graph_run / 'stats').glob('*_node.json')):
+        st = json.loads(f.read_text())
+        assert st['all_acked'] is True, f.name
+        assert st['held_unsent'] == {}, f.name
+
+
 def test_bag_reads_with_independent_reader(graph_run):
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory

@@ -395,6 +395,113 @@ def test_recorder_records_every_message(tmp_path: Path, ros_context: Context) ->
     assert last.linear_acceleration.z == msgs[-1].linear_acceleration.z
 
 
+def imu_bias(i: int) -> Imu:
+    """A /truth/imu_bias message numbered i: stamp 1 s + 100 ms * i."""
+    m = Imu()
+    m.header.stamp.sec = 1 + i // 10
+    m.header.stamp.nanosec = (i % 10) * 100_000_000
+    m.header.frame_id = 'aircraft'
+    m.angular_velocity.x = 1e-6 * i
+    return m
+
+
+def test_recorder_waits_for_expected_counts(tmp_path: Path, ros_context: Context) -> None:
+    """With --expect-counts, end-time is not the end: a topic outside --wait-topics whose
+    messages arrive long after every wait-topic reached end-time (much later than --drain, as a
+    message the transport dropped and the reliable protocol resends at the next heartbeat) is
+    still recorded in full; the recorder stops once every topic has its published count."""
+    n, k = 200, 12
+    bag, stats, expect = tmp_path / 'rec', tmp_path / 'stats.json', tmp_path / 'published.json'
+    rec = tool('recorder', '--out', str(bag), '--topics', '/aircraft/imu', '/truth/imu_bias',
+               '--end-time', repr(stamp_ns(imu(n - 1)) / NS), '--wait-topics', '/aircraft/imu',
+               '--drain', '0.1', '--expect-counts', str(expect), '--expect-timeout', '30',
+               '--stats', str(stats))
+    try:
+        wait_line(rec, 'recorder ready')
+        node = Node('test_publisher', context=ros_context)
+        pub_imu = node.create_publisher(Imu, '/aircraft/imu', STREAM)
+        pub_bias = node.create_publisher(Imu, '/truth/imu_bias', STREAM)
+        wait_matched(pub_imu)
+        wait_matched(pub_bias)
+        for i in range(n):
+            pub_imu.publish(imu(i))
+        wait_line(rec, 'recorder end-time reached')
+        time.sleep(1.0)       # ten quiet periods (--drain): the drain rule would have stopped
+        assert rec.poll() is None, 'the recorder stopped before it had the expected counts'
+        for i in range(k):
+            pub_bias.publish(imu_bias(i))
+        assert pub_bias.wait_for_all_acked(Duration(seconds=10))
+        expect.write_text(json.dumps({'/aircraft/imu': n, '/truth/imu_bias': k}))
+        out, err = rec.communicate(timeout=20)
+    finally:
+        if rec.poll() is None:
+            rec.kill()
+            rec.communicate()
+    assert rec.returncode == 0, err
+    st = json.loads(stats.read_text())
+    assert st['end_reason'] == 'end_time'
+    assert st['missing'] == {}
+    assert st['topics'] == {'/aircraft/imu': n, '/truth/imu_bias': k}
+    assert topic_counts(bag) == {'/aircraft/imu': n, '/truth/imu_bias': k}
+    got = [m.t_ns for m in read_bag(bag, ['/truth/imu_bias'])]
+    assert got == [stamp_ns(imu_bias(i)) for i in range(k)]
+
+
+def test_recorder_reports_a_shortfall(tmp_path: Path, ros_context: Context) -> None:
+    """Expected counts that never arrive: the recorder gives up after --expect-timeout, says
+    'incomplete' and names the shortfall (the launcher then reports the loss)."""
+    n = 20
+    bag, stats, expect = tmp_path / 'rec', tmp_path / 'stats.json', tmp_path / 'published.json'
+    expect.write_text(json.dumps({'/aircraft/imu': n, '/truth/imu_bias': 3}))
+    rec = tool('recorder', '--out', str(bag), '--topics', '/aircraft/imu', '/truth/imu_bias',
+               '--end-time', repr(stamp_ns(imu(n - 1)) / NS), '--wait-topics', '/aircraft/imu',
+               '--expect-counts', str(expect), '--expect-timeout', '1', '--stats', str(stats))
+    try:
+        wait_line(rec, 'recorder ready')
+        node = Node('test_publisher', context=ros_context)
+        pub_imu = node.create_publisher(Imu, '/aircraft/imu', STREAM)
+        pub_bias = node.create_publisher(Imu, '/truth/imu_bias', STREAM)
+        wait_matched(pub_imu)
+        wait_matched(pub_bias)
+        pub_bias.publish(imu_bias(0))
+        for i in range(n):
+            pub_imu.publish(imu(i))
+        out, err = rec.communicate(timeout=20)
+    finally:
+        if rec.poll() is None:
+            rec.kill()
+            rec.communicate()
+    assert rec.returncode == 0, err
+    st = json.loads(stats.read_text())
+    assert st['end_reason'] == 'incomplete'
+    assert st['missing'] == {'/truth/imu_bias': 2}
+    assert st['topics'] == {'/aircraft/imu': n, '/truth/imu_bias': 1}
+
+
+def test_recorder_takes_what_the_executor_did_not_dispatch(tmp_path: Path,
+                                                             ros_context: Context) -> None:
+    """take_pending() records messages already in the reader although no executor ran (the
+    recorder's safety net when a topic is short of its expected count)."""
+    from alignment_ros.recorder import Recorder
+    n = 50
+    rec_node = Node('recorder_under_test', context=ros_context)
+    writer = BagWriter(tmp_path / 'bag')
+    rec = Recorder(rec_node, writer, {'/aircraft/imu': IMU}, None, [])
+    node = Node('test_publisher', context=ros_context)
+    pub = node.create_publisher(Imu, '/aircraft/imu', STREAM)
+    wait_matched(pub)
+    for i in range(n):
+        pub.publish(imu(i))
+    assert pub.wait_for_all_acked(Duration(seconds=10))
+    assert rec.counts['/aircraft/imu'] == 0
+    assert rec.missing({'/aircraft/imu': n}) == {'/aircraft/imu': n}
+    assert rec.take_pending(['/aircraft/imu']) == n
+    assert rec.missing({'/aircraft/imu': n}) == {}
+    assert rec.take_pending(['/aircraft/imu']) == 0
+    writer.close()
+    assert [m.t_ns for m in read_bag(tmp_path / 'bag')] == [stamp_ns(imu(i)) for i in range(n)]
+
+
 # --- (e) player -----------------------------------------------------------------------------
 
 def test_player_publishes_every_message(tmp_path: Path, ros_context: Context) -> None:

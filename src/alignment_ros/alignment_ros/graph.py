@@ -2,8 +2,12 @@
 
 Each node is a separate process started through scripts/start_node.sh with one params file
 written from the scenario; the ship node starts the clock once every subscription is
-matched; the recorder stops when every stream has reached the scenario's end; then all
-nodes get SIGINT, and the summary is computed from the bag.
+matched. When every stream of END_TOPICS has reached the scenario's end, the recorder says so;
+then the nodes get SIGINT and stop once every subscriber has acknowledged every message they
+sent; their published counts go to the recorder (stats/published.json), which records until
+it has all of them (no quiet-period guess: on a loaded machine a message the transport dropped
+arrives seconds later, when the reliable protocol resends it); then the summary is computed
+from the bag.
 """
 from __future__ import annotations
 
@@ -13,6 +17,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -30,7 +35,7 @@ MATCHED = {
     'master_ins_node': {topics.MASTER_ODOM: 2, topics.MASTER_FIX: 1, topics.TRUTH_MASTER_ERROR: 1},
     'slave_ins_node': {topics.AIRCRAFT_IMU: 2, topics.TRUTH_AIRCRAFT_ODOM: 2, topics.TRUTH_MISALIGNMENT: 1,
                        topics.TRUTH_IMU_BIAS: 1},
-    'ldv_node': {topics.LDV_TWIST: 2, topics.DOPPLER_TWIST: 1},
+    'ldv_node': {topics.LDV_TWIST: 2, topics.DOPPLER_TWIST: 2},   # filter + recorder
     'alignment_filter_node': {t: 1 for t in topics.FILTER_OUTPUT_TOPICS},
 }
 NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node')
@@ -38,8 +43,14 @@ NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node
 
 def _list_param(name: str, items: dict[str, int]) -> str:
     return f'{name}:=[' + ','.join(f'"{t}:{n}"' for t, n in items.items()) + ']'
+
+
+# the streams whose last stamp marks the end of the run (the filter's output last: it has
+# processed everything); the recorder then waits for the publishers' final counts of every topic
 END_TOPICS = (topics.SHIP_ODOM, topics.MASTER_ODOM, topics.AIRCRAFT_IMU, topics.LDV_TWIST,
               topics.TRUTH_AIRCRAFT_ODOM, topics.ALIGN_MISALIGNMENT)
+NODE_STOP_TIMEOUT_S = 60.0    # > node_util.ACK_TIMEOUT_S: nodes wait for acknowledgements
+RECORDER_EXPECT_TIMEOUT_S = 120.0
 
 
 def root() -> Path:
@@ -70,11 +81,16 @@ def start(name: str, params: Path, out: Path, *args: str) -> subprocess.Popen:
 
 
 def start_recorder(out: Path, bag: Path, end_time_s: float, topic_list, wait_topics,
-                   name: str = 'recorder') -> subprocess.Popen:
+                   name: str = 'recorder', expect_counts: Path | None = None) -> subprocess.Popen:
+    """Start the recorder and wait for its ``ready`` line. With expect_counts it records, after
+    end-time, until every topic has the count that file gives (see :func:`finish_recording`)."""
     cmd = [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/recorder'),
            '--out', str(bag), '--end-time', repr(end_time_s), '--stats',
            str(out / 'stats' / f'{name}.json'), '--topics', *topic_list,
            '--wait-topics', *wait_topics]
+    if expect_counts is not None:
+        cmd += ['--expect-counts', str(expect_counts),
+                '--expect-timeout', repr(RECORDER_EXPECT_TIMEOUT_S)]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=open(out / 'logs' / f'{name}.log', 'w'),
                          text=True, start_new_session=True)
     deadline = time.monotonic() + 60
@@ -84,6 +100,44 @@ def start_recorder(out: Path, bag: Path, end_time_s: float, topic_list, wait_top
         if time.monotonic() > deadline:
             break
     raise RuntimeError(f'{name} did not become ready; see {out}/logs/{name}.log')
+
+
+def watch_end_time(recorder: subprocess.Popen) -> threading.Event:
+    """An event set when the recorder prints that end-time is reached (its stdout is read to
+    the end in a background thread)."""
+    reached = threading.Event()
+
+    def read() -> None:
+        for line in recorder.stdout:
+            if 'end-time reached' in line:
+                reached.set()
+    threading.Thread(target=read, daemon=True).start()
+    return reached
+
+
+def write_expected_counts(path: Path, counts: dict[str, int]) -> None:
+    """Atomically (the recorder polls for the file)."""
+    tmp = path.with_suffix('.tmp')
+    tmp.write_text(json.dumps(counts, indent=1, sort_keys=True) + '\n')
+    os.replace(tmp, path)
+
+
+def finish_recording(procs: dict[str, subprocess.Popen], out: Path, expect_counts: Path) -> None:
+    """End of a run, in order: stop the nodes (each exits once its subscribers acknowledged
+    every message), give the recorder their published counts, wait until it has recorded them."""
+    stop({n: p for n, p in procs.items() if n != 'recorder'}, timeout=NODE_STOP_TIMEOUT_S)
+    write_expected_counts(expect_counts, published_counts(out))
+    rec = procs['recorder']
+    try:
+        rec.wait(RECORDER_EXPECT_TIMEOUT_S + 30.0)
+    except subprocess.TimeoutExpired:
+        stop({'recorder': rec})
+    stats = out / 'stats' / 'recorder.json'
+    if stats.exists():
+        st = json.loads(stats.read_text())
+        if st.get('missing'):
+            print(f'warning: the recorder ended ({st["end_reason"]}) without '
+                  f'{st["missing"]}', file=sys.stderr)
 
 
 def stop(procs: dict[str, subprocess.Popen], timeout: float = 15.0) -> None:
@@ -99,10 +153,16 @@ def stop(procs: dict[str, subprocess.Popen], timeout: float = 15.0) -> None:
             print(f'warning: {name} did not stop in time and was killed', file=sys.stderr)
 
 
-def published_counts(out: Path) -> dict[str, int]:
+def published_counts(out: Path, with_held: bool = False) -> dict[str, int]:
+    """Messages the nodes sent, per topic (from their stats files); with_held: plus those they
+    still held at exit because their subscribers never matched (sent nowhere: lost too)."""
     pub: dict[str, int] = {}
     for f in sorted((out / 'stats').glob('*_node.json')):
-        for k, v in json.loads(f.read_text()).get('published', {}).items():
+        st = json.loads(f.read_text())
+        items = list(st.get('published', {}).items())
+        if with_held:
+            items += list(st.get('held_unsent', {}).items())
+        for k, v in items:
             pub[k] = pub.get(k, 0) + v
     return pub
 
@@ -139,7 +199,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # optional sensors' topics are recorded only when enabled (no empty topics in the bag)
         recorded = [t for t in topics.TOPIC_TYPES if t != topics.DOPPLER_TWIST or sc.doppler.enabled]
-        procs['recorder'] = start_recorder(out, out / 'bag', end_s, recorded, END_TOPICS)
+        expect = out / 'stats' / 'published.json'
+        procs['recorder'] = start_recorder(out, out / 'bag', end_s, recorded, END_TOPICS,
+                                           expect_counts=expect)
+        end_reached = watch_end_time(procs['recorder'])
         for n in NODES:
             procs[n] = start(n, params, out)
         procs['ship_motion_node'] = start(
@@ -147,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
             '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']))
         timeout = a.timeout or 120.0 + 3.0 * sc.duration_s
         deadline = time.monotonic() + timeout
-        while procs['recorder'].poll() is None:
+        while procs['recorder'].poll() is None and not end_reached.is_set():
             for n, p in procs.items():
                 if n != 'recorder' and p.poll() not in (None, 0):
                     raise RuntimeError(f'{n} exited with {p.returncode}; see {out}/logs/{n}.log')
@@ -159,10 +222,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f'run_graph: {e}', file=sys.stderr)
         stop(procs)
         return 1
-    finally:
-        pass
-    stop(procs)
-    s = summary.summarise(out / 'bag', out / 'bag', sc.duration_s, wall, published_counts(out))
+    finish_recording(procs, out, expect)
+    s = summary.summarise(out / 'bag', out / 'bag', sc.duration_s, wall,
+                          published_counts(out, with_held=True))
     s['scenario'] = sc.name
     s['seed'] = sc.seed
     summary.report(s, out)

@@ -1,5 +1,6 @@
 """Shared node plumbing: start-up with clear config errors, publish counters, stats file,
-clean shutdown on SIGINT/SIGTERM."""
+clean shutdown on SIGINT/SIGTERM (held messages sent, every message acknowledged by every
+reliable subscriber before the process exits)."""
 from __future__ import annotations
 
 import json
@@ -18,6 +19,11 @@ from rclpy.node import Node
 from alignment_core.config import ConfigError
 
 from . import qos
+
+ACK_TIMEOUT_S = 30.0
+"""At shutdown: how long a node waits for its subscribers to acknowledge every message. A
+message the transport dropped is resent only at the writer's next heartbeat (Fast DDS: every
+3 s); a process that exits before then takes it with it."""
 
 
 class CountingNode(Node):
@@ -40,6 +46,7 @@ class CountingNode(Node):
                 topic, _, n = item.rpartition(':')
                 self._need[topic] = int(n)
         self._held: dict[str, list] = {}
+        self._all_acked: bool | None = None   # set by wait_acked()
         if self._need:
             # held messages go out as soon as their subscribers match, even when nothing else
             # is sent any more (a steady clock: simulation time may have stopped)
@@ -78,18 +85,24 @@ class CountingNode(Node):
         return {t: len(v) for t, v in self._held.items() if v}
 
     def wait_acked(self, timeout_s: float = 10.0) -> bool:
+        """Block until every reliable subscriber has acknowledged every message published so far
+        (all publishers together within timeout_s). False if some were not."""
         ok = True
+        deadline = time.monotonic() + timeout_s
         for pub in self._pubs.values():
+            left = max(0.0, deadline - time.monotonic())
             try:
-                ok &= bool(pub.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout_s)))
+                ok &= bool(pub.wait_for_all_acked(rclpy.duration.Duration(seconds=left)))
             except Exception:   # not supported by every RMW
                 pass
+        self._all_acked = ok
         return ok
 
     def stats(self) -> dict:
         return {'node': self.get_name(), 'published': dict(self.published),
                 'received': dict(self.received), 'rejected': dict(self.rejected),
-                'held_unsent': self.held(), 'cpu_s': time.process_time()}
+                'held_unsent': self.held(), 'all_acked': self._all_acked,
+                'cpu_s': time.process_time()}
 
     def write_stats(self) -> None:
         path = self.get_parameter('stats_path').value
@@ -110,7 +123,8 @@ def stop_on_signals() -> dict[str, bool]:
 
 def run(node_factory, spin: bool = True) -> None:
     """Create the node (config errors exit with status 2 and a one-line reason), spin until
-    SIGINT/SIGTERM, then write stats and shut down.
+    SIGINT/SIGTERM, then send what is held, wait until every subscriber has acknowledged every
+    message (ACK_TIMEOUT_S), write stats and shut down.
 
     The EventsExecutor dispatches several times faster than the wait-set executors; it is
     spun from the main thread only (it runs no callbacks from a background thread)."""
@@ -138,6 +152,9 @@ def run(node_factory, spin: bool = True) -> None:
         while node.held() and time.monotonic() < deadline:
             node.flush_held()
             executor.spin_once(timeout_sec=0.05)
+        if not node.wait_acked(ACK_TIMEOUT_S):
+            node.get_logger().warning(
+                f'not every message was acknowledged within {ACK_TIMEOUT_S:.0f} s')
         node.write_stats()
         node.destroy_node()
         rclpy.try_shutdown()

@@ -13,13 +13,23 @@ End: the recorder stops at the first of
   message stamped >= end-time (for a topic without a stamp: its log time); without
   ``--wait-topics``, every topic with a stamp that has received anything must reach it (a
   stream that legitimately stops early, like ``/truth/misalignment`` at the launch, belongs
-  outside ``--wait-topics``). It then keeps recording until
-  no message arrived for ``--drain`` wall seconds (late messages of other topics are not lost);
+  outside ``--wait-topics``). It prints ``recorder end-time reached`` and then, with
+  ``--expect-counts FILE``, keeps recording until FILE exists (``{topic: count}``: what the
+  publishers report they sent, written by the launcher once they have stopped) and every
+  recorded topic has received that count; without it, until no message arrived for
+  ``--drain`` wall seconds (a guess: a message the transport dropped is resent by the reliable
+  protocol only at the writer's next heartbeat, seconds later, and the messages after it on that
+  topic wait for it, so a quiet period can end before a slow topic is complete);
+* ``incomplete``: ``--expect-counts`` is given and the counts were not all reached within
+  ``--expect-timeout`` wall seconds of end-time (the stats list the shortfall as ``missing``);
 * ``idle_timeout``: nothing arrived for ``--idle-timeout`` wall seconds after the first message;
 * ``signal``: SIGINT or SIGTERM.
 
-It then closes the bag (MCAP summary + metadata.yaml) and writes ``--stats``. It prints
-``recorder ready`` (one flushed stdout line) once every subscription exists.
+While a topic is short of its expected count the recorder also takes from its subscription
+directly (not only when the executor dispatches an event), so a message that reached the reader
+is never left behind. It then closes the bag (MCAP summary + metadata.yaml) and writes
+``--stats``. It prints ``recorder ready`` (one flushed stdout line) once every subscription
+exists.
 """
 from __future__ import annotations
 
@@ -73,6 +83,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument('--drain', type=float, default=0.5, metavar='S',
                    help='after end-time is reached, keep recording until S wall seconds are quiet '
                         '(default 0.5)')
+    p.add_argument('--expect-counts', type=Path, metavar='FILE',
+                   help='after end-time: wait for FILE ({topic: count}, the publishers\' final '
+                        'counts) and record until every topic has reached its count (instead of '
+                        '--drain)')
+    p.add_argument('--expect-timeout', type=float, default=120.0, metavar='S',
+                   help='with --expect-counts: give up S wall seconds after end-time '
+                        '(end reason incomplete; default 120)')
     p.add_argument('--stats', type=Path, metavar='FILE', help='write counts and end reason as JSON')
     p.add_argument('--executor', choices=('events', 'single'), default='events',
                    help='rclpy executor (default: events, the EventsExecutor)')
@@ -90,7 +107,18 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     missing = [t for t in args.wait_topics if t not in args.topics]
     if missing:
         p.error(f'--wait-topics not recorded: {", ".join(missing)}')
+    if args.expect_counts is not None and args.end_time is None:
+        p.error('--expect-counts needs --end-time')
     return args
+
+
+def read_expected(path: Path) -> dict[str, int] | None:
+    """The expected counts ({topic: count}) once the file exists (written atomically), else None."""
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        return None
+    return {str(k): int(v) for k, v in json.loads(text).items()}
 
 
 class Recorder:
@@ -109,11 +137,14 @@ class Recorder:
         self.max_stamp_ns = 0
         self.first_rx: float | None = None
         self.last_rx: float | None = None
-        self.subscriptions = []
+        self.taken_directly = 0  # messages taken by take_pending() rather than by the executor
+        self.subscriptions = {}
+        self.handlers = {}
         for topic, type_name in topics.items():
             writer.add_topic(topic, type_name)
-            self.subscriptions.append(node.create_subscription(
-                msg_class(type_name), topic, self._callback(topic, type_name), STREAM, raw=True))
+            self.handlers[topic] = self._callback(topic, type_name)
+            self.subscriptions[topic] = node.create_subscription(
+                msg_class(type_name), topic, self.handlers[topic], STREAM, raw=True)
 
     def _callback(self, topic: str, type_name: str) -> Any:
         read_stamp = stamp_reader(type_name)
@@ -147,6 +178,27 @@ class Recorder:
 
         return on_message
 
+    def missing(self, expected: dict[str, int]) -> dict[str, int]:
+        """Recorded topics that have not yet received their expected count -> shortfall."""
+        return {t: n - self.counts[t] for t, n in expected.items()
+                if t in self.counts and self.counts[t] < n}
+
+    def take_pending(self, topics: list[str]) -> int:
+        """Take every message already in these subscriptions' readers and record it (as the
+        executor would), whether or not the executor has an event for it. Returns how many."""
+        n = 0
+        for topic in topics:
+            sub = self.subscriptions[topic]
+            while True:
+                with sub.handle:
+                    info = sub.handle.take_message(sub.msg_type, sub.raw)
+                if info is None:
+                    break
+                self.handlers[topic](info[0])
+                n += 1
+        self.taken_directly += n
+        return n
+
     def end_time_reached(self) -> bool:
         """True when every --wait-topics topic (or, without any, every stamped topic seen)
         has reached end-time."""
@@ -173,6 +225,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     executor = make_executor(args.executor)
     writer = BagWriter(args.out)
     reason = 'error'
+    expected: dict[str, int] | None = None
     try:
         rec = Recorder(node, writer, args.topics, args.end_time, args.wait_topics)
         executor.add_node(node)
@@ -186,7 +239,21 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
             now = time.monotonic()
             if end_seen is None and rec.end_time_reached():
                 end_seen = now
-            if end_seen is not None:
+                print('recorder end-time reached', flush=True)
+            if end_seen is not None and args.expect_counts is not None:
+                if expected is None:
+                    expected = read_expected(args.expect_counts)
+                if expected is not None:
+                    short = rec.missing(expected)
+                    if short and rec.take_pending(list(short)):
+                        short = rec.missing(expected)
+                    if not short:
+                        reason = 'end_time'
+                        break
+                if now - end_seen >= args.expect_timeout:
+                    reason = 'incomplete'
+                    break
+            elif end_seen is not None:
                 quiet_since = max(end_seen, rec.last_rx or end_seen)
                 if now - quiet_since >= args.drain or now - end_seen >= max(10 * args.drain, 5.0):
                     reason = 'end_time'
@@ -206,6 +273,9 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         'topics': rec.counts,
         'total': total,
         'end_reason': reason,
+        'expected': expected,
+        'missing': rec.missing(expected or {}),
+        'taken_directly': rec.taken_directly,
         'last_stamp_ns': rec.last_stamp_ns,
         'executor': args.executor,
         'receive_span_s': span,
