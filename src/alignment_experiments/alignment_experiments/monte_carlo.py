@@ -78,8 +78,13 @@ def attitude_errors(est: list, q_true: np.ndarray) -> tuple[np.ndarray, np.ndarr
     """(K, 3) slave attitude error phi (nav frame, C_est = (I - [phi x]) C_true) and its 1-sigma
     from the filter's attitude covariance, at each estimate."""
     q_est = np.array([e.q_nb for e in est]).reshape(-1, 4)
-    phi = (Rotation.from_quat(q_true) * Rotation.from_quat(q_est).inv()).as_rotvec()
-    sig = np.sqrt(np.array([np.diag(e.attitude_cov) for e in est]).reshape(-1, 3))
+    norm = np.linalg.norm(q_est, axis=1)
+    ok = np.isfinite(norm) & (norm > 0.5)          # a diverged filter (NaN or zero quaternion) scores NaN
+    phi = np.full((len(q_est), 3), np.nan)
+    if np.any(ok):
+        phi[ok] = (Rotation.from_quat(q_true[ok]) * Rotation.from_quat(q_est[ok]).inv()).as_rotvec()
+    with np.errstate(invalid='ignore'):
+        sig = np.sqrt(np.array([np.diag(e.attitude_cov) for e in est]).reshape(-1, 3))
     return phi, sig
 
 

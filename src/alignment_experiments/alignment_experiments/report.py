@@ -47,7 +47,9 @@ def _plots(out: Path, exp: Experiment, cells: dict[str, list[RunOutcome]]) -> li
             ax.plot(runs[0].t_s, 3 * sig, 'k--', lw=1.0, label='±3σ (mean)')
             ax.plot(runs[0].t_s, -3 * sig, 'k--', lw=1.0)
             ax.axvline(runs[0].score_time_s, color='grey', lw=0.8, ls=':')
-            lim = max(3 * float(np.max(sig[len(sig) // 3:])), 1.5 * max(abs(float(o.err[i])) for o in runs), 1e-3)
+            cand = [3 * float(np.nanmax(sig[len(sig) // 3:])) if np.any(np.isfinite(sig)) else 0.0]
+            cand += [1.5 * abs(float(o.err[i])) for o in runs if np.isfinite(o.err[i])]
+            lim = max(max(cand), 1e-3)
             ax.set_ylim(-lim, lim)
             ax.grid(alpha=0.3)
             if r == 0:
@@ -65,8 +67,8 @@ def _plots(out: Path, exp: Experiment, cells: dict[str, list[RunOutcome]]) -> li
 
     # RMS per cell and axis
     labels = list(cells)
-    rms = np.array([[np.sqrt(np.mean([o.err[i] ** 2 for o in runs])) for i in range(3)] for runs in cells.values()])
-    sig = np.array([[np.mean([o.sigma[i] for o in runs]) for i in range(3)] for runs in cells.values()])
+    rms = np.array([[np.sqrt(np.nanmean([o.err[i] ** 2 for o in runs])) for i in range(3)] for runs in cells.values()])
+    sig = np.array([[np.nanmean([o.sigma[i] for o in runs]) for i in range(3)] for runs in cells.values()])
     fig, ax = plt.subplots(figsize=(max(6.0, 0.55 * len(labels) * 3), 4.2))
     x = np.arange(len(labels))
     for i, a in enumerate(exp.axes):
@@ -89,7 +91,7 @@ def _plots(out: Path, exp: Experiment, cells: dict[str, list[RunOutcome]]) -> li
             vals = dict(runs[0].spec.values)
             key = tuple((k, v) for k, v in runs[0].spec.values if k != exp.sweep)
             groups.setdefault(key, []).append(
-                (float(vals[exp.sweep]), np.sqrt(np.mean([o.err ** 2 for o in runs], axis=0))))
+                (float(vals[exp.sweep]), np.sqrt(np.nanmean([o.err ** 2 for o in runs], axis=0))))
         fig, axs = plt.subplots(1, 3, figsize=(13, 3.8), squeeze=False)
         for key, pts in groups.items():
             pts.sort(key=lambda p: p[0])
@@ -157,13 +159,19 @@ def write_report(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: 
     for runs in cells.values():
         err = np.array([o.err for o in runs])
         sig = np.array([o.sigma for o in runs])
-        st = [axis_stats(err[:, i], sig[:, i]) for i in range(3)]
-        ne = float(np.mean([o.nees for o in runs]))
-        lo, hi = nees_bounds(3, len(runs))
+        fin = np.all(np.isfinite(err), axis=1) & np.all(np.isfinite(sig), axis=1)
+        if not np.any(fin):
+            fin[:] = True                       # all diverged: the statistics show it as NaN
+        st = [axis_stats(err[fin, i], sig[fin, i]) for i in range(3)]
+        ne = float(np.mean([o.nees for o, f in zip(runs, fin) if f]))
+        lo, hi = nees_bounds(3, int(np.sum(fin)))
         settle = np.array([o.settle_s for o in runs])
         med = [float(np.median(settle[np.isfinite(settle[:, i]), i])) if np.any(np.isfinite(settle[:, i]))
                else float('nan') for i in range(3)]
         vals = dict(runs[0].spec.values)
+        bad = int(np.sum(~np.all(np.isfinite(err), axis=1)))
+        if bad:
+            vals = {**vals, vn[-1]: f'{vals.get(vn[-1], "")} ({bad} of {len(runs)} diverged)'}
         rows.append([str(vals.get(k, '')) for k in vn]
                     + ['/'.join(_f(s.rms) for s in st), '/'.join(_f(s.p95) for s in st),
                        '/'.join(_f(s.mean_sigma) for s in st), '/'.join(_f(s.in_2sigma, 2) for s in st),
@@ -180,9 +188,9 @@ def write_report(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: 
                 if not _matches(dict(runs[0].spec.values), ref.match):
                     continue
                 if ref.stat == 'sigma':
-                    ours = np.mean([o.sigma for o in runs], axis=0)
+                    ours = np.nanmean([o.sigma for o in runs], axis=0)
                 else:
-                    ours = np.sqrt(np.mean([o.err ** 2 for o in runs], axis=0))
+                    ours = np.sqrt(np.nanmean([o.err ** 2 for o in runs], axis=0))
                 cols = [('mean 1σ' if ref.stat == 'sigma' else 'RMS error')]
                 for i in range(3):
                     p = ref.arcmin[i]

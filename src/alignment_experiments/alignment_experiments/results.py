@@ -82,8 +82,11 @@ def summary_table(outcomes: list[RunOutcome], axes: tuple[str, ...] = AXES) -> t
         vals = dict(runs[0].spec.values)
         err = np.array([o.err for o in runs])
         sig = np.array([o.sigma for o in runs])
+        fin = np.all(np.isfinite(err), axis=1) & np.all(np.isfinite(sig), axis=1)   # diverged runs: see runs.csv
+        if np.any(fin):
+            err, sig = err[fin], sig[fin]
         settle = np.array([o.settle_s for o in runs])
-        lo, hi = nees_bounds(1, len(runs))
+        lo, hi = nees_bounds(1, len(err))
         for i, a in enumerate(axes):
             s = axis_stats(err[:, i], sig[:, i])
             ok = np.isfinite(settle[:, i])
