@@ -43,6 +43,7 @@ from .catapult import CatapultConfig, CatapultMotion, check_catapult_grid
 from .config import require
 from .deck_flexure import FlexureConfig, FlexureProcess, right_jacobian
 from .flight_profile import FlightConfig, FlightPath
+from .rng import stage_rng
 from .samples import AircraftTruth, ShipBatch, ShipSample
 from .vibration import Vibration, VibrationConfig
 
@@ -57,9 +58,12 @@ class AircraftConfig:
     """Deck spot, heading on deck and mounting, catapult and flight. Default misalignment is
     seed 000's (10', 15', -30') in its right-forward-up axes, i.e. (15', -10', -30') in FLU
     (x fwd/roll, y left, z up/yaw). heading_on_deck_deg: the aircraft's (and the catapult
-    track's) nominal heading from the ship's bow, clockwise (0: a bow catapult)."""
+    track's) nominal heading from the ship's bow, clockwise (0: a bow catapult).
+    misalignment_random_arcmin > 0 adds a random constant per axis (1-sigma, drawn once per seed
+    from the stream 'mounting') to the given misalignment."""
     lever_arm_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
     misalignment_arcmin: tuple[float, float, float] = (15.0, -10.0, -30.0)
+    misalignment_random_arcmin: float = 0.0
     heading_on_deck_deg: float = 0.0
     catapult: CatapultConfig = field(default_factory=CatapultConfig)
     vibration: VibrationConfig = field(default_factory=VibrationConfig)
@@ -72,6 +76,8 @@ class AircraftConfig:
                 f"lever_arm_m out of range (|horizontal| <= 200 m, |z| <= 50 m): {self.lever_arm_m}")
         require(np.all(np.abs(self.misalignment_arcmin) <= 600.0),
                 f"misalignment_arcmin must be within +-600' per axis: {self.misalignment_arcmin}")
+        require(0.0 <= self.misalignment_random_arcmin <= 120.0,
+                f"misalignment_random_arcmin must be in [0, 120], got {self.misalignment_random_arcmin}")
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
                 f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
 
@@ -88,6 +94,8 @@ class AircraftKinematics:
         self.plane = plane
         self.r0 = np.asarray(cfg.lever_arm_m, dtype=float)
         self.mu = np.asarray(cfg.misalignment_arcmin, dtype=float) * ARCMIN
+        if cfg.misalignment_random_arcmin > 0.0:
+            self.mu = self.mu + stage_rng(seed, 'mounting').standard_normal(3) * cfg.misalignment_random_arcmin * ARCMIN
         self.q_sa = Rotation.from_rotvec(self.mu).as_quat()
         if cfg.heading_on_deck_deg != 0.0:
             half = -0.5 * cfg.heading_on_deck_deg * DEG                  # ROS yaw is anticlockwise

@@ -9,7 +9,7 @@ import numpy as np
 
 from . import earth
 from .aircraft import AircraftKinematics
-from .attitude import ARCMIN, DEG
+from .attitude import DEG
 from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipBatch, ShipSample
 from .scenario import Scenario, tau_of
 from .sensors import DopplerSample, DopplerStage, ImuErrorModel, LdvStage, MasterInsStage
@@ -108,7 +108,8 @@ def simulate(sc: Scenario) -> Inputs:
     sensor_truth = {'imu_t_ns': ships.t_ns[1:].copy(), 'imu_gyro_bias': bias[:, :3], 'imu_accel_bias': bias[:, 3:],
                     'master_t_ns': np.array([o.t_ns for o in masters], dtype=np.int64),
                     'master_phi': np.array([o.phi for o in masters]).reshape(-1, 3),
-                    'master_dv': np.array([o.dv for o in masters]).reshape(-1, 3)}
+                    'master_dv': np.array([o.dv for o in masters]).reshape(-1, 3),
+                    'mounting': slave.kin.mu.copy()}
     return Inputs(ships, truth, imu, [o.sample for o in masters], ldv, doppler, sensor_truth)
 
 
@@ -142,7 +143,7 @@ def run(sc: Scenario, keep_truth: bool = True) -> BatchResult:
     filt = align(sc, inp)
     truths: list[AircraftTruth] = []
     if keep_truth:
-        t, mu = inp.truth, np.asarray(sc.aircraft.misalignment_arcmin) * ARCMIN
+        t, mu = inp.truth, inp.sensor_truth['mounting']
         truths = [AircraftTruth(t_ns=int(inp.ships.t_ns[k]), p_w=t['p_w'][k], q_nb=t['q_nb'][k],
                                 v_b=t['v_b'][k], w_b=t['w_b'][k], misalignment=mu,
                                 on_deck=bool(t['on_deck'][k])) for k in range(len(inp.ships))]
