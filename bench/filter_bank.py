@@ -1,7 +1,7 @@
 """Cost of one predict + update for every filter of the bank, against filterpy's KalmanFilter on
 the same workload in the same run; optionally seed 003's long single-precision run.
 
-    python bench/filter_bank.py [--steps 3000] [--repeat 3] [--float32 [STEPS]]
+    python bench/filter_bank.py [--steps 3000] [--repeat 3] [--float32 [STEPS]] [--engine [SECONDS]]
 
 Workloads (H as in the alignment filters):
   n=12, m=3: velocity matching, H = [0 I 0 0] (selects the velocity states);
@@ -11,6 +11,14 @@ innovations are realistic (nothing is gated). Each step (predict + update) is ti
 the table gives the median over all steps of the best of --repeat runs, in microseconds, and the
 ratio to filterpy's median (< 1: faster than filterpy). Rows '(callables)' use
 predict_nonlinear / update_nonlinear with Python callables for the same linear model.
+
+--engine [SECONDS]: the transfer-alignment engine itself (TransferAlignment, what the filter node
+runs per message) on a simulated deck run (default 60 s at sea state 4): the time per IMU step
+with its master + LDV match (push the three samples, process), median / 95th percentile /
+mean in microseconds, for seed003_21 (the 21-state node step; target < 200 us) beside vm15 (the
+default) and vm15 with 20 ms of master latency (matching against the slave history); ratio =
+median / the bare KalmanFilter predict + update on the n=21, m=6 workload timed in the same run
+(what the machine's load does to both).
 
 --float32: the closed-loop 21-state run of tests/filters/test_float32.py, longer (default
 60000 steps = 600 s at 100 Hz): smallest eigenvalue of P and the worst |error| / sigma_64 of the
@@ -179,13 +187,58 @@ def float32_run(steps: int) -> None:
             print(f'{(k + 1) / 100:6.0f} s  ' + ' | '.join(out), flush=True)
 
 
+ENGINE_CASES = {
+    'seed003_21 (21 states, v + att)': {'filter.model': 'seed003_21'},
+    'vm15 (default, 15 states)': {},
+    'vm15, master latency 20 ms': {'master.latency_s': 0.02, 'filter.master_latency_s': 0.02},
+}
+
+
+def engine_run(seconds: float, repeat: int) -> None:
+    from alignment_core import pipeline, scenario
+    from alignment_core.transfer_alignment import TransferAlignment
+    kf_us = min(time_filter(FILTERS['KalmanFilter (Joseph)'], workload(21, 6, 2000), False) for _ in range(repeat))
+    print(f'TransferAlignment per IMU step + match, deck scenario, {seconds:g} s at 100 Hz, best of {repeat}; '
+          f'bare KF step (n=21, m=6): {kf_us:.1f} us')
+    print(f'{"case":36s}{"median us":>11}{"p95 us":>9}{"mean us":>9}{"ratio":>7}{"updates":>9}')
+    for name, ov in ENGINE_CASES.items():
+        sc = scenario.load('deck', {'duration_s': seconds, **ov})
+        inp = pipeline.simulate(sc)
+        best = None
+        for _ in range(repeat):
+            f = TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
+            ts = np.empty(len(inp.imu))
+            clock = time.perf_counter_ns
+            j_l = j_m = 0
+            for k, imu in enumerate(inp.imu):
+                t = imu.t_ns
+                t0 = clock()
+                f.push_imu(imu)
+                while j_l < len(inp.ldv) and inp.ldv[j_l].t_ns <= t:
+                    f.push_ldv(inp.ldv[j_l])
+                    j_l += 1
+                while j_m < len(inp.master) and inp.master[j_m].t_ns <= t:
+                    f.push_master(inp.master[j_m])
+                    j_m += 1
+                f.process()
+                ts[k] = clock() - t0
+            ts = ts[len(ts) // 10:] * 1e-3          # skip the first tenth (start-up, caches)
+            if best is None or np.median(ts) < np.median(best):
+                best = ts
+        print(f'{name:36s}{np.median(best):11.1f}{np.quantile(best, 0.95):9.1f}{best.mean():9.1f}'
+              f'{np.median(best) / kf_us:7.1f}{f.counters.updates:9d}')
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument('--steps', type=int, default=3000)
     ap.add_argument('--repeat', type=int, default=3)
     ap.add_argument('--float32', type=int, nargs='?', const=60000, default=None)
+    ap.add_argument('--engine', type=float, nargs='?', const=60.0, default=None, metavar='SECONDS')
     a = ap.parse_args()
-    if a.float32:
+    if a.engine:
+        engine_run(a.engine, a.repeat)
+    elif a.float32:
         float32_run(a.float32)
     else:
         bench(a.steps, a.repeat)

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..attitude import ARCMIN, DEG, DPH, dcm_to_rotvec_small, rotvec_to_dcm_small
+from ..attitude import ARCMIN, DEG, DPH, dcm_to_rotvec_small
 from ..deck_flexure import BETA_TAU, gm2_discrete
 from ..sensors import UG
 from ..strapdown import NavState, quat_mul, quat_to_dcm, rotvec_to_quat
@@ -55,6 +55,7 @@ from .base import (
     Measurement,
     Propagation,
     nominal_attitude,
+    rotation_matrix,
     skew_into,
 )
 from .velocity_matching import LABELS as VM_LABELS
@@ -94,6 +95,13 @@ class Seed003VelocityAttitude(ErrorModel):
         self.beta = BETA_TAU / self.tau_flex
         self.r_att = np.eye(3) * (cfg.attitude_match_sigma_arcmin * ARCMIN) ** 2
         self._flex: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        self._h0 = np.zeros((6, self._n))
+        self._h0[0:3, 3:6] = np.eye(3)
+        self._h0[3:6, 0:3] = np.eye(3)
+        if master_states:
+            self._h0[3:6, PHI_M] = -np.eye(3)
+        self._r0 = np.zeros((6, 6))
+        self._r0[3:6, 3:6] = self.r_att
         self._qd: dict[float, np.ndarray] = {}
 
     def initial_covariance(self) -> np.ndarray:
@@ -145,25 +153,20 @@ class Seed003VelocityAttitude(ErrorModel):
 
     def reference_attitude(self, m: Match, corr: Corrections) -> np.ndarray:
         """C = C_m,est c_nom exp([mu_est x]): the aircraft attitude predicted from the master."""
-        return nominal_attitude(m) @ rotvec_to_dcm_small(corr.mu)
+        return nominal_attitude(m) @ rotation_matrix(corr.mu)
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
-        n = self._n
         c = self.reference_attitude(m, corr)
         c_a = quat_to_dcm(m.ins.q_nb)
         delta = c_a @ c.T
         z = np.concatenate([m.z_vel, dcm_to_rotvec_small(delta.T)])
-        h = np.zeros((6, n))
-        h[0:3, 3:6] = np.eye(3)
-        h[3:6, 0:3] = np.eye(3)
+        h = self._h0.copy()               # the constant blocks: I (velocity), I (phi), -I (phi_m)
         h[3:6, MU] = -c
         h[3:6, THETA] = -c
         if self.master:
             skew_into(h, 0, 21, -m.u_n)
-            h[3:6, PHI_M] = -np.eye(3)
-        r = np.zeros((6, 6))
+        r = self._r0.copy()
         r[0:3, 0:3] = m.r_vel
-        r[3:6, 3:6] = self.r_att
         return Measurement(z, h, r)
 
     def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
