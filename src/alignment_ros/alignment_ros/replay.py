@@ -20,7 +20,7 @@ from alignment_core.models import DOPPLER_MODELS
 
 from . import summary, topics
 from .bag import BagError, BagReader
-from .graph import root, start, start_recorder, stop, use_domain
+from .graph import finish_recording, root, start, start_recorder, stop, use_domain, watch_end_time
 from .topics import FILTER_OUTPUT_TOPICS, SENSOR_TOPICS
 
 HOLD = 'hold_until_matched:=[' + ','.join(f'"{t}:1"' for t in FILTER_OUTPUT_TOPICS) + ']'
@@ -89,9 +89,11 @@ def main(argv: list[str] | None = None) -> int:
     procs: dict[str, subprocess.Popen] = {}
     wall0 = time.monotonic()
     try:
+        expect = out / 'stats' / 'published.json'
         procs['recorder'] = start_recorder(out, out / 'bag', end_ns * 1e-9,
                                            list(topics.FILTER_OUTPUT_TOPICS),
-                                           [topics.ALIGN_MISALIGNMENT])
+                                           [topics.ALIGN_MISALIGNMENT], expect_counts=expect)
+        end_reached = watch_end_time(procs['recorder'])
         procs['alignment_filter_node'] = start('alignment_filter_node', params, out,
                                                 '-p', HOLD)
         _wait_graph()
@@ -102,13 +104,19 @@ def main(argv: list[str] | None = None) -> int:
             stdout=open(out / 'logs' / 'player.log', 'w'), stderr=subprocess.STDOUT)
         if player.returncode != 0:
             raise RuntimeError(f'player failed; see {out}/logs/player.log')
-        procs['recorder'].wait(timeout=120)
+        deadline = time.monotonic() + 120.0
+        while not end_reached.is_set() and procs['recorder'].poll() is None:
+            if time.monotonic() > deadline:
+                raise RuntimeError('the filter outputs did not reach the end time within 120 s')
+            time.sleep(0.2)
     except (RuntimeError, subprocess.TimeoutExpired) as e:
         print(f'replay: {e}', file=sys.stderr)
         stop(procs)
         return 1
     wall = time.monotonic() - wall0
-    stop(procs)
+    # stop the filter once its subscribers acknowledged everything, then let the recorder
+    # record every message the filter reports having published (as run_graph does)
+    finish_recording(procs, out, expect)
     pub = json.loads((out / 'stats' / 'alignment_filter_node.json').read_text())['published']
     sim = (end_ns - min(m.t_ns for m in BagReader(bag).messages([topics.MASTER_ODOM]))) * 1e-9
     s = summary.summarise(bag, out / 'bag', sim, wall, pub)
