@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import rclpy
+from conftest import spin_until
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
@@ -23,13 +24,6 @@ from alignment_ros import convert, domain, qos, topics
 ROOT = Path(__file__).resolve().parents[2]
 PARAMS = ROOT / 'config/params/graph.yaml'
 BROKEN = {'filter.model': 'seed003_21', 'filter.float32': True, 'filter.algorithm': 'kf'}
-
-
-def _wait(node, cond, timeout=30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not cond():
-        rclpy.spin_once(node, timeout_sec=0.05)
-        assert time.monotonic() < deadline, 'timed out'
 
 
 def test_breakdown_is_held_and_reported_not_raised():
@@ -57,14 +51,14 @@ def test_breakdown_is_held_and_reported_not_raised():
         diag: list[DiagnosticArray] = []
         node.create_subscription(Vector3Stamped, topics.ALIGN_MISALIGNMENT, mis.append, qos.STREAM)
         node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, diag.append, qos.STREAM)
-        _wait(node, lambda: all(p.get_subscription_count() >= 1 for p in pubs.values()))
+        spin_until(node, lambda: all(p.get_subscription_count() >= 1 for p in pubs.values()))
         time.sleep(1.0)
         for k in range(n):
             if k > 0:
                 pubs[topics.AIRCRAFT_IMU].publish(convert.imu_to_msg(inp.imu[k - 1], 0.0, 0.0))
             pubs[topics.LDV_TWIST].publish(convert.ldv_to_msg(inp.ldv[k]))
             pubs[topics.MASTER_ODOM].publish(convert.master_to_msg(inp.master[k]))
-        _wait(node, lambda: len(mis) == len(ref.outputs) and len(diag) >= 4)
+        spin_until(node, lambda: len(mis) == len(ref.outputs) and len(diag) >= 4)
         assert proc.poll() is None                          # still running
         have = np.array([convert.vec_msg_to_array(m)[1] for m in mis])
         want = np.array([e.misalignment for e in ref.outputs])

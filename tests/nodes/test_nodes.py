@@ -3,15 +3,11 @@ stage, reject bad input with counts in /diagnostics, and refuse invalid paramete
 from __future__ import annotations
 
 import dataclasses
-import os
-import signal
-import subprocess
 import time
 from pathlib import Path
 
 import numpy as np
-import pytest
-import rclpy
+from conftest import spin_until
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
@@ -20,45 +16,11 @@ from sensor_msgs.msg import Imu
 from alignment_core import pipeline, scenario
 from alignment_core.attitude import DEG
 from alignment_core.sensors import MasterInsModel
-from alignment_ros import convert, domain, qos, topics
+from alignment_ros import convert, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]
 PARAMS = ROOT / 'config/params/graph.yaml'
 SC = scenario.load('catapult')
-
-
-@pytest.fixture
-def ros():
-    dom = domain.claim()
-    rclpy.init(domain_id=dom)
-    node = rclpy.create_node('test_driver')
-    procs = []
-
-    def start(name: str, *args: str) -> subprocess.Popen:
-        env = dict(os.environ, ROS_DOMAIN_ID=str(dom))
-        p = subprocess.Popen([str(ROOT / 'scripts/start_node.sh'), name, '--params-file', str(PARAMS),
-                              '--ros-args', *args], env=env, stdout=subprocess.PIPE,
-                             stderr=subprocess.STDOUT, text=True, start_new_session=True)
-        procs.append(p)
-        return p
-    yield node, start
-    for p in procs:
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGINT)
-            try:
-                p.wait(10)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
-    node.destroy_node()
-    rclpy.shutdown()
-    domain.release(dom)
-
-
-def _wait(node, cond, timeout=30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not cond():
-        rclpy.spin_once(node, timeout_sec=0.05)
-        assert time.monotonic() < deadline, 'timed out'
 
 
 def test_master_node_equals_its_core_stage(ros):
@@ -67,12 +29,12 @@ def test_master_node_equals_its_core_stage(ros):
     pub = node.create_publisher(Odometry, topics.SHIP_ODOM, qos.STREAM)
     node.create_subscription(Odometry, topics.MASTER_ODOM, got.append, qos.STREAM)
     start('master_ins_node')
-    _wait(node, lambda: pub.get_subscription_count() >= 1 and node.count_publishers(topics.MASTER_ODOM) >= 1)
+    spin_until(node, lambda: pub.get_subscription_count() >= 1 and node.count_publishers(topics.MASTER_ODOM) >= 1)
     time.sleep(1.0)
     ships = pipeline.ship_samples(SC)[:200]
     for s in ships:
         pub.publish(convert.ship_to_msgs(s)[0])
-    _wait(node, lambda: len(got) == len(ships))
+    spin_until(node, lambda: len(got) == len(ships))
     model = MasterInsModel(SC.master, SC.seed, SC.ship.lat_deg * DEG)
     for s, m in zip(ships, got):
         want = model.measure(convert.msgs_to_ship(convert.ship_to_msgs(s)[0]))
@@ -95,7 +57,7 @@ def test_filter_node_rejects_bad_input_and_reports_it(ros):
     node.create_subscription(Vector3Stamped, topics.ALIGN_MISALIGNMENT, mis.append, qos.STREAM)
     node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, diag.append, qos.STREAM)
     start('alignment_filter_node', '-p', 'hold_until_matched:=["/alignment/misalignment:1","/diagnostics:1"]')
-    _wait(node, lambda: all(p.get_subscription_count() >= 1 for p in pubs.values()))
+    spin_until(node, lambda: all(p.get_subscription_count() >= 1 for p in pubs.values()))
     time.sleep(1.0)
     gyro_var = accel_var = 0.0
     for k in range(n):
@@ -108,7 +70,7 @@ def test_filter_node_rejects_bad_input_and_reports_it(ros):
                 pubs[topics.AIRCRAFT_IMU].publish(convert.imu_to_msg(inp.imu[k - 5], gyro_var, accel_var))
         pubs[topics.LDV_TWIST].publish(convert.ldv_to_msg(inp.ldv[k]))
         pubs[topics.MASTER_ODOM].publish(convert.master_to_msg(inp.master[k]))
-    _wait(node, lambda: len(mis) == 31 and len(diag) >= 4)
+    spin_until(node, lambda: len(mis) == 31 and len(diag) >= 4)
     # the good data give exactly the batch filter's estimates
     ref = pipeline.align(sc, dataclasses.replace(
         inp, ships=inp.ships.slice(slice(0, n)), imu=inp.imu[:n - 1], master=inp.master[:n], ldv=inp.ldv[:n]))
@@ -139,7 +101,7 @@ def test_parameters_are_frozen_while_running(ros):
     req = SetParameters.Request(parameters=[Parameter(
         name='ldv.noise_mps', value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=0.5))])
     fut = cli.call_async(req)
-    _wait(node, fut.done)
+    spin_until(node, fut.done)
     res = fut.result().results[0]
     assert not res.successful
     assert 'fixed while the node runs' in res.reason

@@ -4,15 +4,12 @@ their alignment_core stages' records: master_ins_node (Schuler model, 50 Hz, 25 
 /doppler/twist)."""
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-import rclpy
+from conftest import spin_until
 from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 
@@ -21,7 +18,7 @@ from alignment_core.attitude import DEG
 from alignment_core.doppler_radar import DopplerStage
 from alignment_core.ldv import LdvStage
 from alignment_core.master_ins import MasterInsStage
-from alignment_ros import convert, domain, qos, topics
+from alignment_ros import convert, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]
 PARAMS = ROOT / 'config/params/graph.yaml'
@@ -29,40 +26,6 @@ MASTER_SETS = {'master.model': 'schuler', 'master.rate_hz': 50.0, 'master.latenc
                'master.arw_dpsh': 0.001, 'master.vrw_ugpshz': 5.0}
 LDV_SETS = {'ldv.rate_hz': 25.0, 'ldv.latency_s': 0.013, 'ldv.dropout_rate_hz': 2.0, 'ldv.dropout_mean_s': 0.05,
             'ldv.bias_mps': 0.01, 'doppler.enabled': True, 'doppler.latency_s': 0.02}
-
-
-@pytest.fixture
-def ros():
-    dom = domain.claim()
-    rclpy.init(domain_id=dom)
-    node = rclpy.create_node('sensor_test_driver')
-    procs = []
-
-    def start(name: str, sets: dict) -> subprocess.Popen:
-        args = [a for k, v in sets.items() for a in ('-p', f'{k}:={str(v).lower() if isinstance(v, bool) else v}')]
-        p = subprocess.Popen([str(ROOT / 'scripts/start_node.sh'), name, '--params-file', str(PARAMS),
-                              '--ros-args', *args], env=dict(os.environ, ROS_DOMAIN_ID=str(dom)),
-                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-        procs.append(p)
-        return p
-    yield node, start
-    for p in procs:
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGINT)
-            try:
-                p.wait(10)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
-    node.destroy_node()
-    rclpy.shutdown()
-    domain.release(dom)
-
-
-def _wait(node, cond, timeout=30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not cond():
-        rclpy.spin_once(node, timeout_sec=0.05)
-        assert time.monotonic() < deadline, 'timed out'
 
 
 def test_master_node_schuler_rate_latency(ros):
@@ -73,8 +36,9 @@ def test_master_node_schuler_rate_latency(ros):
     pub = node.create_publisher(Odometry, topics.SHIP_ODOM, qos.STREAM)
     node.create_subscription(Odometry, topics.MASTER_ODOM, odom.append, qos.STREAM)
     node.create_subscription(Vector3Stamped, topics.TRUTH_MASTER_ERROR, err.append, qos.STREAM)
-    start('master_ins_node', MASTER_SETS)
-    _wait(node, lambda: pub.get_subscription_count() >= 1 and node.count_publishers(topics.TRUTH_MASTER_ERROR) >= 1)
+    start('master_ins_node', sets=MASTER_SETS)
+    spin_until(node, lambda: pub.get_subscription_count() >= 1
+               and node.count_publishers(topics.TRUTH_MASTER_ERROR) >= 1)
     time.sleep(1.0)
     ships = pipeline.ship_samples(sc)[:101]
     for s in ships:
@@ -82,7 +46,7 @@ def test_master_node_schuler_rate_latency(ros):
     stage = MasterInsStage(sc.master, sc.seed, sc.ship.lat_deg * DEG, sc.rate_hz, sc.t0_ns)
     want = [o for s in ships for o in stage.step(convert.msgs_to_ship(convert.ship_to_msgs(s)[0]))]
     assert len(want) == 49                      # 0 .. 960 ms at 50 Hz; 980 + 25 ms is past the last
-    _wait(node, lambda: len(odom) == len(want) and len(err) == 10)
+    spin_until(node, lambda: len(odom) == len(want) and len(err) == 10)
     for w, m in zip(want, odom):
         have = convert.msg_to_master(m)
         assert have.t_ns == w.t_ns
@@ -104,8 +68,8 @@ def test_ldv_node_timing_dropouts_and_doppler(ros):
     pa = node.create_publisher(Odometry, topics.TRUTH_AIRCRAFT_ODOM, qos.STREAM)
     node.create_subscription(TwistWithCovarianceStamped, topics.LDV_TWIST, ldv.append, qos.STREAM)
     node.create_subscription(TwistWithCovarianceStamped, topics.DOPPLER_TWIST, dop.append, qos.STREAM)
-    start('ldv_node', LDV_SETS)
-    _wait(node, lambda: ps.get_subscription_count() >= 1 and pa.get_subscription_count() >= 1
+    start('ldv_node', sets=LDV_SETS)
+    spin_until(node, lambda: ps.get_subscription_count() >= 1 and pa.get_subscription_count() >= 1
           and node.count_publishers(topics.DOPPLER_TWIST) >= 1)
     time.sleep(1.0)
     st_ldv = LdvStage(sc.ldv, sc.seed, pipeline.plane_of(sc), sc.rate_hz, sc.t0_ns)
@@ -124,7 +88,7 @@ def test_ldv_node_timing_dropouts_and_doppler(ros):
         want_dop += st_dop.step(a)
     assert len(want_ldv) == 50 and len(want_dop) == 20
     assert not all(w.valid for w in want_ldv)            # some dropouts
-    _wait(node, lambda: len(ldv) == len(want_ldv) and len(dop) == len(want_dop))
+    spin_until(node, lambda: len(ldv) == len(want_ldv) and len(dop) == len(want_dop))
     for w, m in zip(want_ldv, ldv):
         h = convert.msg_to_ldv(m)
         assert (h.t_ns, h.valid) == (w.t_ns, w.valid)

@@ -1,0 +1,59 @@
+"""Shared test fixtures: `ros` starts project nodes as processes on a private ROS domain and
+drives them from an in-process rclpy node; `spin_until` spins that node until a condition."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PARAMS = ROOT / 'config/params/graph.yaml'
+
+
+def spin_until(node, cond, timeout: float = 30.0) -> None:
+    """Spin `node` until cond() holds; fail after `timeout` seconds."""
+    import rclpy
+    deadline = time.monotonic() + timeout
+    while not cond():
+        rclpy.spin_once(node, timeout_sec=0.05)
+        assert time.monotonic() < deadline, 'timed out'
+
+
+def _param_args(sets: dict) -> list[str]:
+    return [a for k, v in sets.items() for a in ('-p', f'{k}:={str(v).lower() if isinstance(v, bool) else v}')]
+
+
+@pytest.fixture
+def ros():
+    """(driver node, start): start(name, *ros_args, sets={key: value}) launches a node with the
+    default params file; every started node is stopped (SIGINT, then SIGKILL) afterwards."""
+    import rclpy
+
+    from alignment_ros import domain
+    dom = domain.claim()
+    rclpy.init(domain_id=dom)
+    node = rclpy.create_node('test_driver')
+    procs: list[subprocess.Popen] = []
+
+    def start(name: str, *args: str, sets: dict | None = None) -> subprocess.Popen:
+        p = subprocess.Popen([str(ROOT / 'scripts/start_node.sh'), name, '--params-file', str(PARAMS),
+                              '--ros-args', *args, *_param_args(sets or {})],
+                             env=dict(os.environ, ROS_DOMAIN_ID=str(dom)), stdout=subprocess.PIPE,
+                             stderr=subprocess.STDOUT, text=True, start_new_session=True)
+        procs.append(p)
+        return p
+    yield node, start
+    for p in procs:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGINT)
+            try:
+                p.wait(10)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+    node.destroy_node()
+    rclpy.shutdown()
+    domain.release(dom)
