@@ -70,6 +70,13 @@ combined do not. ekf/ukf/ckf run in float64 only. `lever_arm_states` needs `leve
 compensation` (the states are the error of the compensated arm) and a linear model other
 than seed001_13; seed001_13 needs `doppler.enabled` (checked by the scenario).
 
+Matching options (models/__init__.py): `attitude_match_axes: yaw` (seed003_* only: a heading
+match needs the mounting states), `rate_matching` (vm12, vm15, seed003_*; not with stf /
+stf_multiple, whose V0 recursion needs the same rows at every update: the rate rows need the
+previous master sample on the IMU grid, so they start at the second), `master_delay_state` (any
+linear model but seed001_13). The engine hands them the IMU interval ending at the match (raw
+gyro rate, velocity change) and the previous master sample (`_match_extras`).
+
 Doppler (seed001_13): a fourth input stream, /doppler/twist, ordered before the master at
 equal stamps; each valid sample stamped at an IMU instant is matched (models/seed001.py).
 """
@@ -100,7 +107,7 @@ from .filters import (
 )
 from .filters.lowpass import ButterworthLowPass
 from .models import DOPPLER_MODELS, NONLINEAR_MODELS, Corrections, Match, Propagation, make_model
-from .models.base import DV
+from .models.base import DV, RateInputs
 from .samples import ImuSample, LdvSample, MasterSample
 from .strapdown import NavState, Strapdown, quat_mul, quat_to_dcm
 from .sync import StampMerger
@@ -110,6 +117,8 @@ STREAMS = ('imu', 'ldv', 'master')
 DOPPLER_STREAMS = ('imu', 'ldv', 'doppler', 'master')   # seed001_13: the Doppler radar too
 LINEAR_ALGORITHMS = ('kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud', 'combined')
 NONLINEAR_ALGORITHMS = ('ekf', 'ukf', 'ckf')
+ATTITUDE_MODELS = ('seed003_21', 'seed003_24')           # attitude-match rows and mounting states
+RATE_MODELS = ('vm12', 'vm15', 'seed003_21', 'seed003_24')  # phi and eps states: rate matching
 
 
 @dataclass(frozen=True)
@@ -162,6 +171,11 @@ class FilterConfig:
     stf_lambda_max: float = 1e6               # cap on the strong tracking fading factor(s)
     launch_accel_noise_mps2: float = 0.0      # velocity noise density (m/s^2/sqrt(Hz)) after the launch
     launch_noise_s: float = 1.0               # ... for this long after the LDV detects it
+    attitude_match_axes: Literal['all', 'yaw'] = 'all'   # seed003_*: match all three axes or heading only
+    rate_matching: bool = False               # + angular-rate rows (models/rate_matching.py)
+    rate_match_sigma_dph: float = 1.0         # white noise of the rate match beyond the gyro's ARW
+    master_delay_state: bool = False          # + the master's unknown latency as a state (models/master_delay.py)
+    master_delay_sigma_ms: float = 20.0       # ... its prior 1-sigma
 
     def validate(self) -> None:
         for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
@@ -187,7 +201,7 @@ class FilterConfig:
         require(self.fading_gamma >= 1.0, f"fading_gamma must be >= 1, got {self.fading_gamma}")
         for k in ('butterworth_cutoff_hz', 'lever_arm_sigma_m', 'mounting_sigma_deg', 'attitude_match_sigma_arcmin',
                   'large_angle_feedback_deg', 'doppler_scale_sigma_ppm', 'doppler_bias_sigma_mps',
-                  'doppler_drift_sigma_arcmin'):
+                  'doppler_drift_sigma_arcmin', 'rate_match_sigma_dph', 'master_delay_sigma_ms'):
             require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
         require(self.init_yaw_sigma_deg >= 0.0, f"init_yaw_sigma_deg must be >= 0, got {self.init_yaw_sigma_deg}")
         require(all(v > 0.0 for v in self.flexure_sigma_arcmin + self.flexure_tau_s),
@@ -209,6 +223,19 @@ class FilterConfig:
             require(not self.lever_arm_states, f"lever_arm_states is not available with the nonlinear model {m}")
         require(not (self.float32 and a in NONLINEAR_ALGORITHMS),
                 f"algorithm {a} runs in float64 only: set float32 false or pick one of {', '.join(LINEAR_ALGORITHMS)}")
+        require(self.attitude_match_axes in ('all', 'yaw'),
+                f"attitude_match_axes must be 'all' or 'yaw', got {self.attitude_match_axes!r}")
+        require(self.attitude_match_axes == 'all' or m in ATTITUDE_MODELS,
+                f"attitude_match_axes yaw needs a model with mounting states and attitude rows "
+                f"({', '.join(ATTITUDE_MODELS)}): a heading match without them would pull the slave onto the "
+                f"master's heading, off by the unknown mounting yaw; got model {m}")
+        require(not self.rate_matching or m in RATE_MODELS,
+                f"rate_matching needs attitude and gyro-bias states (models {', '.join(RATE_MODELS)}), got {m}")
+        require(not (self.rate_matching and a in ('stf', 'stf_multiple')),
+                f"algorithm {a} cannot take rate_matching: its innovation recursion needs the same rows at "
+                f"every update, and the rate rows start at the second master sample")
+        require(not self.master_delay_state or (m not in NONLINEAR_MODELS and m not in DOPPLER_MODELS),
+                f"master_delay_state needs a linear model without the Doppler stream, got {m}")
         require(not (self.lever_arm_states and self.lever_arm_treatment != 'compensation'),
                 f"lever_arm_states estimate the error of the compensated lever arm: they need "
                 f"lever_arm_treatment compensation, got {self.lever_arm_treatment}")
@@ -248,6 +275,7 @@ class Counters:
     doppler_updates: int = 0
     unmatched_master: int = 0         # master samples with no slave solution at their validity time
     numerical_failures: int = 0       # breakdowns of the filter (non-finite or non-PD covariance)
+    rate_unmatched: int = 0           # rate matching: matches without a gyro interval / master pair to compare
     extra: dict = field(default_factory=dict)
 
 
@@ -351,6 +379,11 @@ class TransferAlignment:
         self.launch_ns = int(round(cfg.launch_noise_s * 1e9))
         dv = np.array([k == DV for k in self.model.kinds], dtype=float)
         self.q_launch = np.diag(dv) * cfg.launch_accel_noise_mps2 ** 2 if cfg.launch_accel_noise_mps2 > 0.0 else None
+        # rate matching / delay state: the last IMU intervals and the previous master sample
+        self.track_intervals = cfg.rate_matching or cfg.master_delay_state
+        self.intervals: deque[tuple[int, float, np.ndarray, np.ndarray]] = deque(
+            maxlen=int(span / (self.imu_dt_nominal * 1e9)) + 8)     # (t_end, h, raw gyro rate, dv_n)
+        self.prev_master: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None   # t_v, C_m, v_b, w_b
         self.moving = False
         self.ins: Strapdown | None = None
         self.kf: KalmanFilter | None = None
@@ -465,8 +498,11 @@ class TransferAlignment:
         dv = (s.accel - ba) * h
         ins = self.ins
         snap = self.history.record(self.t_ins, ins.s)
+        v_start = ins.s.v_n
         f_n = ins.update(dth, dv, h)
         st = ins.s
+        if self.track_intervals:
+            self.intervals.append((t, h, s.gyro, st.v_n - v_start))
         self.t_ins = t
         self.history.prune(t - self.span_ns, t)
         if not self.healthy:
@@ -589,6 +625,7 @@ class TransferAlignment:
             self.counters.unmatched_master += 1
             self.matching = False
             return
+        extras = self._match_extras(t_v, c_m, m, r, v_rel, moving, past[0]) if self.track_intervals else None
         try:
             r_vel = self.R_moving if moving else self.R_parked
             if moving:
@@ -598,11 +635,46 @@ class TransferAlignment:
                 extra = ldv.var + (ratio - 1.0) * self.cfg.ldv_sigma_mps ** 2 if ratio > 1.0 else ldv.var
                 if extra > 0.0:
                     r_vel = r_vel + np.eye(3) * extra
-            self._update(t_v, c_m, m, r, v_ref, u_n, past, r_vel)
+            self._update(t_v, c_m, m, r, v_ref, u_n, past, r_vel, extras)
         except (np.linalg.LinAlgError, FloatingPointError, ValueError, NumericalBreakdownError) as e:
             self._fail(f'update: {e}')
             return
         self.matching = True
+
+    def _match_extras(self, t_v: int, c_m: np.ndarray, m: MasterSample, r: np.ndarray, v_rel: np.ndarray,
+                      moving: bool, nav: NavState) -> tuple[np.ndarray, np.ndarray | None, RateInputs | None]:
+        """(w_n, a_n, rate inputs) for the delay state and rate matching (models/master_delay.py,
+        rate_matching.py): the master's nav-frame body rate; the deck spot's acceleration, from the
+        slave's velocity change over the IMU interval ending at t_v while parked, else from the
+        master's last two samples with today's lever arm and LDV velocity (the undelayed parts);
+        the gyro and master rates over that interval when the previous master sample started it."""
+        w_n = c_m @ m.w_b
+        prev, self.prev_master = self.prev_master, (t_v, c_m, m.v_b, m.w_b)
+        iv = None
+        for item in reversed(self.intervals):
+            if item[0] == t_v:
+                iv = item
+                break
+            if item[0] < t_v:
+                break
+        a_n = None
+        if not moving and iv is not None:
+            a_n = iv[3] / iv[1]
+        elif moving and prev is not None and prev[0] < t_v:
+            fixed = cross3(m.w_b, r) + v_rel
+            a_n = (c_m @ (m.v_b + fixed) - prev[1] @ (prev[2] + cross3(prev[3], r) + v_rel)) / ((t_v - prev[0]) * 1e-9)
+        rate = None
+        if self.cfg.rate_matching and iv is not None and prev is not None \
+                and t_v - prev[0] == int(round(iv[1] * 1e9)):
+            w_in = self.ins.w_ie + self.ins.w_en
+            w_prev = prev[1] @ prev[3]
+            w_mean = 0.5 * (w_n + w_prev)
+            w_b = iv[2] - self.corr.bg
+            rate = RateInputs(w_b=w_b, dtheta=w_b * iv[1], omega_n=w_mean + w_in, w_n=w_mean,
+                              w_dot_n=(w_n - w_prev) / iv[1], h=iv[1])
+        if rate is None and self.cfg.rate_matching:
+            self.counters.rate_unmatched += 1
+        return w_n, a_n, rate
 
     def _initialise(self, t_v: int, m: MasterSample, c_m: np.ndarray, r: np.ndarray, v_ref: np.ndarray) -> None:
         """Slave = master attitude (times the nominal mounting), velocity and position at the lever
@@ -622,7 +694,8 @@ class TransferAlignment:
                 self.counters.skipped_before_init += 1
 
     def _update(self, t_v: int, c_m: np.ndarray, m: MasterSample, r: np.ndarray, v_ref: np.ndarray,
-                u_n: np.ndarray, past: tuple[NavState, np.ndarray | None], r_vel: np.ndarray) -> None:
+                u_n: np.ndarray, past: tuple[NavState, np.ndarray | None], r_vel: np.ndarray,
+                extras: tuple | None = None) -> None:
         """Velocity (+ attitude) match at t_v. The innovation is formed against the slave solution
         at t_v; the error state is the live one (at t_ins), related to the one at t_v by the
         transitions in between, x(t_ins) = Phi x(t_v) (process noise over the latency neglected),
@@ -635,6 +708,8 @@ class TransferAlignment:
             z_vel = self.lowpass.step(z_vel)
         match = Match(c_m=c_m, w_m=m.w_b, r=r, u_n=u_n, v_ref=v_ref, z_vel=z_vel,
                       r_vel=r_vel, ins=nav, c_nom=self.c_nom)
+        if extras is not None:
+            match.w_n, match.a_n, match.rate = extras
         meas = self.model.measurement(match, self.corr)
         gate = self.cfg.gate_chi2 if self.cfg.gate_chi2 > 0.0 else None
         if meas.h is None:

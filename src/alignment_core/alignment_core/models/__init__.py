@@ -12,19 +12,27 @@ run time by `filter.model`:
     seed001_13           seed001.py            phi, dV_E, dV_N, position, eps, Doppler errors: deck LDV
                                                matching, then Doppler radar matching in flight
 
-`filter.lever_arm_states: true` appends dr (3) to any linear velocity-matching model
-(lever_arm.py). Matching modes: velocity (all), + attitude (seed003_*), + Doppler radar
-velocity (seed001_13); yaw-only and angular-rate matching are not implemented.
+Options, each a wrapper around the model (applied in this order):
+    filter.attitude_match_axes: yaw   yaw_matching.py    seed003_*: velocity + heading match only
+    filter.rate_matching: true        rate_matching.py   + 3 angular-rate rows (models with phi, eps)
+    filter.master_delay_state: true   master_delay.py    + dt_master, the master's unknown latency
+    filter.lever_arm_states: true     lever_arm.py       + dr (3), the lever arm's error
+Matching modes: velocity (all), + attitude (seed003_*) or + yaw only, + angular rate, + Doppler
+radar velocity (seed001_13).
 """
 from __future__ import annotations
 
+from ..attitude import DPH
 from .base import Corrections, ErrorModel, Match, Measurement, Propagation
 from .lever_arm import LeverArmStates
+from .master_delay import MasterDelayState
+from .rate_matching import RateMatching
 from .seed000 import Seed000LargeAngle, Seed000Linear
 from .seed001 import DopplerTuning, Seed001Doppler
 from .seed002 import Seed002Horizontal
 from .seed003 import Seed003VelocityAttitude
-from .velocity_matching import VelocityMatching
+from .velocity_matching import VelocityMatching, noise_densities
+from .yaw_matching import YawMatching
 
 MODELS = ('vm15', 'vm12', 'seed000_6', 'seed000_large_angle', 'seed002_10', 'seed003_21', 'seed003_24',
           'seed001_13')
@@ -52,6 +60,12 @@ def make_model(cfg) -> ErrorModel:
         base = Seed001Doppler(DopplerTuning.from_config(cfg))
     else:
         raise ValueError(f'model {name!r} cannot run in the transfer-alignment engine')
+    if cfg.attitude_match_axes == 'yaw':
+        base = YawMatching(base)
+    if cfg.rate_matching:
+        base = RateMatching(base, noise_densities(cfg).arw, cfg.rate_match_sigma_dph * DPH)
+    if cfg.master_delay_state:
+        base = MasterDelayState(base, cfg.master_delay_sigma_ms * 1e-3)
     if cfg.lever_arm_states:
         return LeverArmStates(base, cfg.lever_arm_sigma_m)
     return base

@@ -51,6 +51,17 @@ class Propagation:
     h: float                # interval, s
 
 
+class RateInputs(NamedTuple):
+    """The slave's and the master's angular rates over the IMU interval [t_v - h, t_v] that ends
+    at a match (rate matching, models/rate_matching.py)."""
+    w_b: np.ndarray          # (3,) slave gyro mean rate, bias-compensated (aircraft axes), rad/s
+    dtheta: np.ndarray       # (3,) the interval's angle increment, w_b h
+    omega_n: np.ndarray      # (3,) inertial rate of the ship (= aircraft) in nav axes, interval mean
+    w_n: np.ndarray          # (3,) its master-attitude-dependent part C_m w_m (interval mean)
+    w_dot_n: np.ndarray      # (3,) d/dt (C_m w_m): the master rate's change (delay state)
+    h: float                 # interval, s
+
+
 @dataclass(slots=True)
 class Match:
     """One matching instant: the master-derived reference for the slave and what it took.
@@ -69,6 +80,9 @@ class Match:
     r_vel: np.ndarray       # (3, 3) its white-noise covariance
     ins: NavState           # the slave solution at this instant (its time of validity)
     c_nom: np.ndarray | None = None   # nominal aircraft axes in ship axes (heading on deck); None = I
+    w_n: np.ndarray | None = None     # master body rate w.r.t. nav in nav axes, C_m w_m (delay state)
+    a_n: np.ndarray | None = None     # acceleration of the ship's deck spot, nav frame (delay state); None: unknown
+    rate: RateInputs | None = None    # angular rates over the IMU interval ending here (rate matching)
 
 
 @dataclass
@@ -96,6 +110,7 @@ class ErrorModel:
     kinds         per state, one of PHI, DV, EPS, NABLA, OTHER (tuning by block)
     attitude      slice of phi in the state
     velocity_rows nav axes (0 E, 1 N, 2 U) of the measurement's velocity rows, in row order
+    attitude_rows nav axes of the attitude-match rows that follow them (seed003: all three)
     nonlinear     True: the engine calls propagator() and needs a nonlinear filter
     uses_doppler  True: the engine also matches the Doppler radar (doppler_measurement())
     """
@@ -106,6 +121,7 @@ class ErrorModel:
     velocity_rows: tuple[int, ...] = (0, 1, 2)
     nonlinear: bool = False
     uses_doppler: bool = False
+    attitude_rows: tuple[int, ...] = ()
 
     @property
     def n(self) -> int:

@@ -30,6 +30,7 @@ class LeverArmStates(ErrorModel):
         self.kinds = base.kinds + (OTHER,) * 3
         self.attitude = base.attitude
         self.velocity_rows = base.velocity_rows
+        self.attitude_rows = base.attitude_rows
         self.nb = base.n
         self.sigma = float(sigma_m)
         self._qd: dict[float, np.ndarray] = {}

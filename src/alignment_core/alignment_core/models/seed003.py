@@ -79,6 +79,7 @@ class Seed003VelocityAttitude(ErrorModel):
     """seed003_21 / seed003_24 (module docstring)."""
     attitude = slice(0, 3)
     velocity_rows = (0, 1, 2)
+    attitude_rows = (0, 1, 2)
 
     def __init__(self, cfg, master_states: bool) -> None:
         self.cfg = cfg
