@@ -7,6 +7,8 @@ composed as C_b^n = Rz(yaw) Ry(pitch) Rx(roll).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -99,20 +101,22 @@ def rotvec_to_dcm_batch(v: np.ndarray) -> np.ndarray:
 
 
 def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b for two 3-vectors (np.cross costs ~40 us a call; this ~2 us)."""
-    a0, a1, a2 = a[0], a[1], a[2]
-    b0, b1, b2 = b[0], b[1], b[2]
+    """a x b for two 3-vectors (np.cross costs ~40 us a call; this ~1 us: the components
+    as Python floats, whose arithmetic is far cheaper than numpy scalars')."""
+    a0, a1, a2 = a.tolist() if type(a) is np.ndarray else a
+    b0, b1, b2 = b.tolist() if type(b) is np.ndarray else b
     return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def dcm_to_rotvec_small(c: np.ndarray) -> np.ndarray:
     """Rotation vector of a rotation matrix whose angle is well below pi (a misalignment)."""
-    v = 0.5 * np.array([c[2, 1] - c[1, 2], c[0, 2] - c[2, 0], c[1, 0] - c[0, 1]])
-    s = np.sqrt(v @ v)
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = c.tolist()   # floats: ~5x cheaper
+    x, y, z = 0.5 * (c21 - c12), 0.5 * (c02 - c20), 0.5 * (c10 - c01)
+    s = math.sqrt(x * x + y * y + z * z)
     if s < 1e-300:
-        return v
-    ang = np.arctan2(s, 0.5 * (c[0, 0] + c[1, 1] + c[2, 2] - 1.0))
-    return v * (ang / s)
+        return np.array([x, y, z])
+    k = math.atan2(s, 0.5 * (c00 + c11 + c22 - 1.0)) / s
+    return np.array([x * k, y * k, z * k])
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -133,5 +137,17 @@ def quat_mul_batch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def rotvec_to_dcm_small(v: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a 3-vector rotation vector (Rodrigues; exact, cheap for one vector)."""
-    return rotvec_to_dcm_batch(np.asarray(v, dtype=float))
+    """Rotation matrix of one rotation vector: Rodrigues' formula I + s [v x] + c [v x]^2 as
+    rotvec_to_dcm_batch (series near zero), in float arithmetic (~10x cheaper for one vector)."""
+    x, y, z = (float(e) for e in v)
+    a2 = x * x + y * y + z * z
+    if a2 < 1e-12:
+        s, c = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
+    else:
+        a = math.sqrt(a2)
+        s, c = math.sin(a) / a, (1.0 - math.cos(a)) / a2
+    # [v x]^2 = v v^T - |v|^2 I
+    xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
+    return np.array([[1.0 + c * (-yy - zz), -s * z + c * xy, s * y + c * xz],
+                     [s * z + c * xy, 1.0 + c * (-xx - zz), -s * x + c * yz],
+                     [-s * y + c * xz, s * x + c * yz, 1.0 + c * (-xx - yy)]])

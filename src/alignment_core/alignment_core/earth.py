@@ -117,18 +117,26 @@ class TangentPlane:
         return self.c @ np.swapaxes(c_el, -1, -2)
 
 
-def local_scalar(lat: float, h: float, v_n: np.ndarray
-                 ) -> tuple[float, float, np.ndarray, np.ndarray, float]:
-    """Scalar fast path for the strapdown: (R_M, R_N, omega_ie^n, omega_en^n, |g|)."""
+def local_terms(lat: float, h: float, v_e: float, v_n: float
+                ) -> tuple[float, float, float, float, float, float, float, float]:
+    """Scalar fast path for the strapdown, in plain floats (no arrays: a 3-vector numpy op
+    costs ~1 us, a float operation ~30 ns): (R_M, R_N, omega_ie^n north and up (east is 0),
+    omega_en^n east, north and up, |g|) at latitude `lat`, height `h` and ENU velocity
+    (v_e, v_n, .)."""
     sl, cl = math.sin(lat), math.cos(lat)
     s2 = sl * sl
     den = 1.0 - E2 * s2
     sq = math.sqrt(den)
     r_n = A / sq
     r_m = A * (1.0 - E2) / (den * sq)
-    w_ie = np.array([0.0, OMEGA_IE * cl, OMEGA_IE * sl])
-    ve = v_n[0]
-    w_en = np.array([-v_n[1] / (r_m + h), ve / (r_n + h), ve * (sl / cl) / (r_n + h)])
     g0 = G_EQUATOR * (1.0 + K_SOMIGLIANA * s2) / sq
     g = g0 * (1.0 - 2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) * h + 3.0 / A**2 * h * h)
-    return r_m, r_n, w_ie, w_en, g
+    return (r_m, r_n, OMEGA_IE * cl, OMEGA_IE * sl,
+            -v_n / (r_m + h), v_e / (r_n + h), v_e * (sl / cl) / (r_n + h), g)
+
+
+def local_scalar(lat: float, h: float, v_n: np.ndarray
+                 ) -> tuple[float, float, np.ndarray, np.ndarray, float]:
+    """(R_M, R_N, omega_ie^n, omega_en^n, |g|) for one point, the rates as (3,) arrays."""
+    r_m, r_n, wie_n, wie_u, wen_e, wen_n, wen_u, g = local_terms(lat, h, float(v_n[0]), float(v_n[1]))
+    return r_m, r_n, np.array([0.0, wie_n, wie_u]), np.array([wen_e, wen_n, wen_u]), g

@@ -42,7 +42,7 @@ import numpy as np
 from ..attitude import ARCMIN, DEG, DPH, dcm_to_rotvec_small
 from ..deck_flexure import BETA_TAU, gm2_discrete
 from ..sensors import UG
-from ..strapdown import NavState, quat_mul, quat_to_dcm, rotvec_to_quat
+from ..strapdown import NavState, floats, normalized_f, quat_mul_f, quat_to_dcm, rotvec_to_quat_f
 from .base import (
     DV,
     EPS,
@@ -56,7 +56,6 @@ from .base import (
     Propagation,
     nominal_attitude,
     rotation_matrix,
-    skew_into,
 )
 from .velocity_matching import LABELS as VM_LABELS
 from .velocity_matching import (
@@ -104,6 +103,13 @@ class Seed003VelocityAttitude(ErrorModel):
         self._r0 = np.zeros((6, 6))
         self._r0[3:6, 3:6] = self.r_att
         self._qd: dict[float, np.ndarray] = {}
+        self._phi0: dict[float, np.ndarray] = {}
+        # cells of H the measurement fills each time: -C at (3, MU) and (3, THETA), then (seed003_24)
+        # -[u x] at (0, PHI_M), as flat indices for one put()
+        cells = [(3 + i, col + j) for col in (MU.start, THETA.start) for i in range(3) for j in range(3)]
+        if master_states:
+            cells += [(0, 22), (0, 23), (1, 21), (1, 23), (2, 21), (2, 22)]    # skew_into's order
+        self._h_cells = np.array([r * self._n + c for r, c in cells])
 
     def initial_covariance(self) -> np.ndarray:
         c = self.cfg
@@ -138,9 +144,12 @@ class Seed003VelocityAttitude(ErrorModel):
         return fl
 
     def transition(self, p: Propagation) -> np.ndarray:
-        phi = np.eye(self._n)
+        phi0 = self._phi0.get(p.h)
+        if phi0 is None:                  # I with the flexure block, per interval length
+            phi0 = self._phi0[p.h] = np.eye(self._n)
+            phi0[15:21, 15:21] = self._flexure(p.h)[0]
+        phi = phi0.copy()
         phi[0:12, 0:12] = transition(p.c_nb, p.f_n, p.w_ie, p.w_en, p.h)
-        phi[15:21, 15:21] = self._flexure(p.h)[0]
         return phi
 
     def process_noise(self, h: float) -> np.ndarray:
@@ -162,17 +171,19 @@ class Seed003VelocityAttitude(ErrorModel):
         delta = c_a @ c.T
         z = np.concatenate([m.z_vel, dcm_to_rotvec_small(delta.T)])
         h = self._h0.copy()               # the constant blocks: I (velocity), I (phi), -I (phi_m)
-        h[3:6, MU] = -c
-        h[3:6, THETA] = -c
-        if self.master:
-            skew_into(h, 0, 21, -m.u_n)
+        neg_c = [-e for e in c.ravel().tolist()]
+        vals = neg_c + neg_c              # H[3:6, MU] = H[3:6, THETA] = -C
+        if self.master:                   # H[0:3, PHI_M] = [(-u) x]  (skew_into's cells and signs)
+            ux, uy, uz = floats(m.u_n)
+            vals += [uz, -uy, -uz, ux, uy, -ux]
+        h.put(self._h_cells, vals)
         r = self._r0.copy()
         r[0:3, 0:3] = m.r_vel
         return Measurement(z, h, r)
 
     def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
-        q = quat_mul(rotvec_to_quat(x[0:3]), nav.q_nb)
-        nav.q_nb = q / np.sqrt(q @ q)
+        phx, phy, phz = x[0:3].tolist()
+        nav.q_nb = np.array(normalized_f(quat_mul_f(rotvec_to_quat_f(phx, phy, phz), floats(nav.q_nb))))
         nav.v_n = nav.v_n - x[3:6]
         corr.bg = corr.bg + x[6:9]
         corr.ba = corr.ba + x[9:12]

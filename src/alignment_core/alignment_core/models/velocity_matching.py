@@ -29,7 +29,7 @@ import numpy as np
 
 from ..attitude import ARCMIN, DEG, DPH, rotvec_to_dcm_small
 from ..sensors import UG
-from ..strapdown import NavState, quat_mul, quat_to_dcm, rotvec_to_quat
+from ..strapdown import NavState, floats, normalized_f, quat_mul_f, quat_to_dcm, rotvec_to_quat_f
 from .base import (
     DV,
     EPS,
@@ -50,6 +50,7 @@ LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dV_U', 'eps_x', 'eps_y', '
 MASTER_LABELS = ('phim_E', 'phim_N', 'phim_U')
 N = 12
 H = np.hstack([np.zeros((3, 3)), np.eye(3), np.zeros((3, 6))])
+_dot = np.dot
 
 
 def labels(master_states: bool) -> tuple[str, ...]:
@@ -79,16 +80,54 @@ class NoiseDensities:
 _EYE = {12: np.eye(12), 15: np.eye(15)}
 
 
+def _skew_cells(r: int, c: int) -> list[tuple[int, int]]:
+    """The cells of [v x] at block (r, c), in the order of _skew_values."""
+    return [(r, c + 1), (r, c + 2), (r + 1, c), (r + 1, c + 2), (r + 2, c), (r + 2, c + 1)]
+
+
+def _skew_values(x: float, y: float, z: float) -> list[float]:
+    return [-z, y, z, -x, -y, x]
+
+
+def _fh_index(n: int) -> np.ndarray:
+    """Flat indices of F h's non-zero cells in an (n, n) array, in the order transition() lists
+    their values: [-w_in h x] at (0, 0), -C h at (0, 6), [f h x] at (3, 0),
+    [-(2 w_ie + w_en) h x] at (3, 3), C h at (3, 9)."""
+    cells = (_skew_cells(0, 0) + [(i, 6 + j) for i in range(3) for j in range(3)] + _skew_cells(3, 0)
+             + _skew_cells(3, 3) + [(3 + i, 9 + j) for i in range(3) for j in range(3)])
+    return np.array([r * n + c for r, c in cells])
+
+
+_FH_INDEX: dict[int, np.ndarray] = {}
+
+
 def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray,
                h: float, n: int = N) -> np.ndarray:
-    """Phi (n, n) over an interval h, from the mean attitude, specific force and rates."""
+    """Phi (n, n) over an interval h, from the mean attitude, specific force and rates.
+
+    Speed: F h's 36 non-zero entries are computed in float arithmetic and written with one
+    put() (numpy slice writes of 3x3 blocks cost ~1 us each); the numbers are those of
+    `continuous(...) * h` written block by block."""
+    idx = _FH_INDEX.get(n)
+    if idx is None:
+        idx = _FH_INDEX[n] = _fh_index(n)
+    c = c_nb.ravel().tolist()
+    fx, fy, fz = f_n.tolist()
+    ie = w_ie.tolist()
+    en = w_en.tolist()
+    mh = -h
+    vals = (_skew_values(mh * (ie[0] + en[0]), mh * (ie[1] + en[1]), mh * (ie[2] + en[2]))
+            + [mh * e for e in c]
+            + _skew_values(h * fx, h * fy, h * fz)
+            + _skew_values(mh * (2.0 * ie[0] + en[0]), mh * (2.0 * ie[1] + en[1]), mh * (2.0 * ie[2] + en[2]))
+            + [h * e for e in c])
     fh = np.zeros((n, n))
-    _skew_into(fh, 0, 0, -h * (w_ie + w_en))
-    fh[0:3, 6:9] = -h * c_nb
-    _skew_into(fh, 3, 0, h * f_n)
-    _skew_into(fh, 3, 3, -h * (2.0 * w_ie + w_en))
-    fh[3:6, 9:12] = h * c_nb
-    return _EYE[n] + fh + 0.5 * (fh @ fh)
+    fh.put(idx, vals)
+    half = _dot(fh, fh)
+    half *= 0.5
+    phi = _EYE[n] + fh
+    phi += half
+    return phi
 
 
 def _skew_into(m: np.ndarray, r: int, c: int, v: np.ndarray) -> None:
@@ -180,8 +219,8 @@ class VelocityMatching(ErrorModel):
     def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         """C <- (I + [phi x]) C (exactly: exp([phi x]) C), V <- V - dV, biases accumulate;
         the master's attitude error is not fed back (it is the master's)."""
-        q = quat_mul(rotvec_to_quat(x[0:3]), nav.q_nb)
-        nav.q_nb = q / np.sqrt(q @ q)
+        phx, phy, phz = x[0:3].tolist()
+        nav.q_nb = np.array(normalized_f(quat_mul_f(rotvec_to_quat_f(phx, phy, phz), floats(nav.q_nb))))
         nav.v_n = nav.v_n - x[3:6]
         corr.bg = corr.bg + x[6:9]
         corr.ba = corr.ba + x[9:12]
