@@ -113,7 +113,8 @@ SEED000 = Experiment(
         "to a near-constant accelerometer error), 'increment' = integrated increments (a real IMU)."),
     scenario='catapult',
     base=(('duration_s', 10.0), ('aircraft.catapult.launch_time_s', 5.0),
-          ('aircraft.vibration.enabled', True), ('aircraft.vibration.mode', 'accelerometer')),
+          ('aircraft.vibration.enabled', True), ('aircraft.vibration.mode', 'accelerometer'),
+          ('filter.launch_accel_noise_mps2', 0.0)),          # the paper's filter: no launch noise
     cells=grid(vibration_mps2=[(v, {'aircraft.vibration.peak_mps2': float(v)}) for v in (0, 5, 10, 20)],
                filter=[(a, {'filter.algorithm': a}) for a in ('kf', 'stf')],
                imu_output=[(m, {'imu.output': m}) for m in ('sample', 'increment')]),
@@ -129,7 +130,32 @@ SEED000 = Experiment(
 
 CATAPULT_GOAL = Experiment(
     name='catapult_goal',
-    title='Catapult goal: a realistic carrier launch, every filter',
+    title='Catapult goal: the catapult scenario under 20 m/s^2 of nose-gear vibration, every filter',
+    description=(
+        "The issue's accuracy goal: the `catapult` scenario (sea state 4, paper-mode ship, seed 000 "
+        "sensors) with an integrated-increment IMU and 20 m/s^2 of 100 Hz nose-gear vibration on the "
+        "forward and vertical accelerometers from the stroke start (seed 000's disturbance, the harder "
+        "mode: the truth does not move with it); 5 s or 60 s of deck matching, then the 3 s 2 g stroke; "
+        "every filter with the scenario's tuning, including its known-event launch noise (0.04 "
+        "m/s^2/sqrt(Hz) for 0.3 s: the vibration's net velocity A/(omega sqrt 2) = 2.2 cm/s). Scored at "
+        "the release. Goal: RMS <= 1' roll, <= 0.5' pitch, <= 1' yaw."),
+    scenario='catapult',
+    base=(('aircraft.vibration.enabled', True), ('aircraft.vibration.peak_mps2', 20.0),
+          ('aircraft.vibration.mode', 'accelerometer'), ('imu.output', 'increment')),
+    cells=grid(deck_s=[(d, {'duration_s': d + 8.0, 'aircraft.catapult.launch_time_s': float(d)}) for d in (5, 60)],
+               filter=[(a, {'filter.algorithm': a}) for a in ALL_FILTERS]),
+    seeds=50,
+    score_at='release',
+    references=tuple(Reference((('deck_s', d),), (1.0, 0.5, 1.0)) for d in (5, 60)),
+    reference_source="the issue's goal (RMS arcmin; not a paper's result)",
+    series='filter',
+    quick_base=(),
+    quick_cells=2,
+)
+
+CATAPULT_REALISTIC = Experiment(
+    name='catapult_realistic',
+    title='A realistic carrier launch: spectral sea state 5, flexure, 100 m arm, vibration as motion, every filter',
     description=(
         "Our own realistic catapult scenario: spectral sea state 5 (Bales Hs 3.25 m, ITTC, cos^2 "
         "spreading, head-bow seas), closed-form 310 m carrier RAOs; aircraft 100 m forward of the "
@@ -334,6 +360,6 @@ class Catalogue:
 
 
 CATALOGUE = Catalogue()
-for _e in (SEED000, SEED001, SEED002, SEED003, CATAPULT_GOAL, DECK_GOAL, CONSISTENCY_CATAPULT,
+for _e in (SEED000, SEED001, SEED002, SEED003, CATAPULT_GOAL, CATAPULT_REALISTIC, DECK_GOAL, CONSISTENCY_CATAPULT,
            CONSISTENCY_DECK):
     CATALOGUE.add(_e)
