@@ -139,7 +139,7 @@ def quat_mul_batch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def rotvec_to_dcm_small(v: np.ndarray) -> np.ndarray:
     """Rotation matrix of one rotation vector: Rodrigues' formula I + s [v x] + c [v x]^2 as
     rotvec_to_dcm_batch (series near zero), in float arithmetic (~10x cheaper for one vector)."""
-    x, y, z = (float(e) for e in v)
+    x, y, z = v.tolist() if type(v) is np.ndarray else (float(e) for e in v)
     a2 = x * x + y * y + z * z
     if a2 < 1e-12:
         s, c = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0

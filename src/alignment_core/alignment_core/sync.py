@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import heapq
 import itertools
-from collections.abc import Iterator
 from typing import Any
+
+Event = tuple[str, int, Any]
 
 
 class StampMerger:
@@ -20,11 +21,14 @@ class StampMerger:
         self.heap: list[tuple[int, int, int, str, Any]] = []
         self.seq = itertools.count()
         self.rejected_out_of_order = {name: 0 for name in streams}
+        self._silent = len(streams)          # streams that have not delivered yet (no watermark)
 
     def push(self, stream: str, t_ns: int, item: Any) -> bool:
         """Queue an item; False (and counted) if its stamp does not advance its stream."""
         last = self.last[stream]
-        if last is not None and t_ns <= last:
+        if last is None:
+            self._silent -= 1
+        elif t_ns <= last:
             self.rejected_out_of_order[stream] += 1
             return False
         self.last[stream] = t_ns
@@ -32,19 +36,28 @@ class StampMerger:
         return True
 
     def watermark(self) -> int | None:
-        stamps = self.last.values()
-        return None if any(s is None for s in stamps) else min(stamps)
+        """The least recent stamp of all streams (None until every stream has delivered)."""
+        return None if self._silent else min(self.last.values())
 
-    def pop_ready(self) -> Iterator[tuple[str, int, Any]]:
+    def pop_ready(self) -> list[Event]:
+        """(stream, stamp, item) of every queued event up to the watermark, in order."""
         wm = self.watermark()
-        while self.heap and wm is not None and self.heap[0][0] <= wm:
-            t, _, _, stream, item = heapq.heappop(self.heap)
-            yield stream, t, item
+        heap, out = self.heap, []
+        if wm is None:
+            return out
+        pop = heapq.heappop
+        while heap and heap[0][0] <= wm:
+            t, _, _, stream, item = pop(heap)
+            out.append((stream, t, item))
+        return out
 
-    def flush(self) -> Iterator[tuple[str, int, Any]]:
-        while self.heap:
-            t, _, _, stream, item = heapq.heappop(self.heap)
-            yield stream, t, item
+    def flush(self) -> list[Event]:
+        """Every queued event, in order."""
+        heap, out = self.heap, []
+        while heap:
+            t, _, _, stream, item = heapq.heappop(heap)
+            out.append((stream, t, item))
+        return out
 
     def pending(self) -> int:
         return len(self.heap)

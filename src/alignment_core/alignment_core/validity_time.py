@@ -22,32 +22,54 @@ spacing, else no measurement (LdvHistory).
 """
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
-from .strapdown import NavState, quat_mul, rotvec_to_quat
+from .strapdown import NavState, floats, normalized_f, quat_mul_f, rotvec_to_quat_f
+
+# The helpers work in float arithmetic on the quaternions' components (strapdown.py: a numpy
+# operation on a 4-vector costs ~30 times a float operation) and return arrays.
 
 
 def quat_conj(q: np.ndarray) -> np.ndarray:
-    return np.array([-q[0], -q[1], -q[2], q[3]])
+    x, y, z, w = floats(q)
+    return np.array([-x, -y, -z, w])
+
+
+def _quat_to_rotvec_f(q) -> tuple[float, float, float]:
+    x, y, z, w = q
+    if w < 0.0:
+        x, y, z, w = -x, -y, -z, -w
+    s = math.sqrt(x * x + y * y + z * z)
+    k = 2.0 if s < 1e-12 else 2.0 * math.atan2(s, w) / s
+    return (x * k, y * k, z * k)
 
 
 def quat_to_rotvec(q: np.ndarray) -> np.ndarray:
     """Rotation vector of a unit (x, y, z, w) quaternion (the shorter rotation)."""
-    if q[3] < 0.0:
-        q = -q
-    s = float(np.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]))
-    if s < 1e-12:
-        return 2.0 * q[0:3]
-    return q[0:3] * (2.0 * np.arctan2(s, q[3]) / s)
+    return np.array(_quat_to_rotvec_f(floats(q)))
 
 
 def slerp(q0: np.ndarray, q1: np.ndarray, f: float) -> np.ndarray:
     """Attitude a fraction f of the way from q0 to q1 (rotation about a fixed body axis)."""
-    q = quat_mul(q0, rotvec_to_quat(f * quat_to_rotvec(quat_mul(quat_conj(q0), q1))))
-    return q / np.sqrt(q @ q)
+    a = floats(q0)
+    rx, ry, rz = _quat_to_rotvec_f(quat_mul_f((-a[0], -a[1], -a[2], a[3]), floats(q1)))
+    return np.array(normalized_f(quat_mul_f(a, rotvec_to_quat_f(f * rx, f * ry, f * rz))))
+
+
+_EYES: dict[int, np.ndarray] = {}
+
+
+def _eye(n: int) -> np.ndarray:
+    """np.eye(n), cached (read only)."""
+    e = _EYES.get(n)
+    if e is None:
+        e = _EYES[n] = np.eye(n)
+        e.flags.writeable = False
+    return e
 
 
 @dataclass(slots=True)
@@ -120,16 +142,17 @@ class SlaveHistory:
             if p is None:
                 return nav, None
             if j == k and f > 0.0:
-                p = np.eye(len(p)) + (1.0 - f) * (p - np.eye(len(p)))
+                eye = _eye(len(p))
+                p = eye + (1.0 - f) * (p - eye)
             phi_acc = p if phi_acc is None else p @ phi_acc
         return nav, phi_acc
 
     def correct(self, q_corr: np.ndarray, dv: np.ndarray, dlat: float, dlon: float, dh: float) -> None:
         """Apply a feedback correction (nav-frame rotation q_corr, velocity and position
         changes) to every stored solution."""
+        qc = floats(q_corr)
         for s in self.items:
-            q = quat_mul(q_corr, s.q_nb)
-            s.q_nb = q / np.sqrt(q @ q)
+            s.q_nb = np.array(normalized_f(quat_mul_f(qc, floats(s.q_nb))))
             s.v_n = s.v_n + dv
             s.lat += dlat
             s.lon += dlon
