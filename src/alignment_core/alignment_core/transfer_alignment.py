@@ -20,7 +20,8 @@ product of the stored transitions; process noise over the latency neglected), so
 measurement matrix is H Phi^-1 (delay-aware H). Phi differs from I by ~ f h (g 20 ms phi:
 2e-5 m/s per 0.3' of tilt at 20 ms), so applying H itself would also do at these latencies;
 H Phi^-1 stays right at larger ones. The correction is fed back into the live solution and,
-identically, into the stored past ones. Not matched in time: the Doppler radar (by stamp).
+identically, into the stored past ones. The Doppler radar is matched the same way at its
+stamp - `doppler_latency_s`.
 
 Initialisation (first master sample): the slave copies the master attitude times the
 nominal mounting on the deck (`heading_on_deck_deg`: C_a^s = Rz(-heading)), velocity and
@@ -78,7 +79,7 @@ linear model but seed001_13). The engine hands them the IMU interval ending at t
 gyro rate, velocity change) and the previous master sample (`_match_extras`).
 
 Doppler (seed001_13): a fourth input stream, /doppler/twist, ordered before the master at
-equal stamps; each valid sample stamped at an IMU instant is matched (models/seed001.py).
+equal stamps; each valid sample is matched at its validity time (models/seed001.py).
 """
 from __future__ import annotations
 
@@ -169,6 +170,7 @@ class FilterConfig:
     heading_on_deck_deg: float = 0.0          # nominal aircraft heading on deck (from the bow, clockwise)
     master_latency_s: float = 0.0             # known latency: /master/odom data are valid at stamp - latency
     ldv_latency_s: float = 0.0                # the same for /ldv/twist
+    doppler_latency_s: float = 0.0            # the same for /doppler/twist (seed001_13)
     stf_lambda_max: float = 1e6               # cap on the strong tracking fading factor(s)
     launch_accel_noise_mps2: float = 0.0      # velocity noise density (m/s^2/sqrt(Hz)) after the launch
     launch_noise_s: float = 1.0               # ... for this long after the LDV detects it
@@ -189,7 +191,7 @@ class FilterConfig:
         require(self.max_gap_factor > 1.0, f"max_gap_factor must be > 1, got {self.max_gap_factor}")
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
                 f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
-        for k in ('master_latency_s', 'ldv_latency_s'):
+        for k in ('master_latency_s', 'ldv_latency_s', 'doppler_latency_s'):
             require(0.0 <= getattr(self, k) <= 1.0, f"{k} must be in [0, 1] s, got {getattr(self, k)}")
         require(self.stf_lambda_max >= 1.0, f"stf_lambda_max must be >= 1, got {self.stf_lambda_max}")
         require(self.launch_accel_noise_mps2 >= 0.0,
@@ -275,6 +277,7 @@ class Counters:
     doppler: int = 0
     doppler_updates: int = 0
     unmatched_master: int = 0         # master samples with no slave solution at their validity time
+    unmatched_doppler: int = 0        # Doppler samples with no slave solution at their validity time
     numerical_failures: int = 0       # breakdowns of the filter (non-finite or non-PD covariance)
     rate_unmatched: int = 0           # rate matching: matches without a gyro interval / master pair to compare
     extra: dict = field(default_factory=dict)
@@ -370,7 +373,8 @@ class TransferAlignment:
         # time of validity (validity_time.py): data valid at stamp - latency
         self.master_lat_ns = int(round(cfg.master_latency_s * 1e9))
         self.ldv_lat_ns = int(round(cfg.ldv_latency_s * 1e9))
-        span = max(self.master_lat_ns, self.ldv_lat_ns) + int(0.2e9)
+        self.doppler_lat_ns = int(round(cfg.doppler_latency_s * 1e9))
+        span = max(self.master_lat_ns, self.ldv_lat_ns, self.doppler_lat_ns) + int(0.2e9)
         self.span_ns = span
         self.max_step_ns = int(cfg.max_gap_factor * self.imu_dt_nominal * 1e9)
         self.history = SlaveHistory(span)
@@ -548,18 +552,25 @@ class TransferAlignment:
             self._match_pending()
 
     def _on_doppler(self, t: int, s: DopplerSample) -> None:
-        """Match the slave velocity to the radar's, resolved with the slave's own attitude
-        (matched by stamp: a sample stamped at an IMU instant)."""
+        """Match the slave velocity to the radar's, resolved with the slave's own attitude, at
+        the radar's validity time t - doppler_latency_s (the slave solution there, H Phi^-1 as
+        for the master; the IMU sample at t has been processed: the radar is ordered after it)."""
         self.counters.doppler += 1
-        if self.ins is None or not s.valid or t != self.t_ins or not self.healthy:
+        if self.ins is None or not s.valid or not self.healthy:
             return
-        st = self.ins.s
-        v_d = quat_to_dcm(st.q_nb) @ s.v_b
+        t_v = t - self.doppler_lat_ns
+        past = self.history.state_at(t_v, self.ins.s, self.t_ins, self.max_step_ns)
+        if past is None:
+            self.counters.unmatched_doppler += 1
+            return
+        nav, phi_acc = past
+        v_d = quat_to_dcm(nav.q_nb) @ s.v_b
         r = np.eye(2) * s.sigma ** 2
-        meas = self.model.doppler_measurement(st.v_n, (st.v_n - v_d)[0:2], r)
+        meas = self.model.doppler_measurement(nav.v_n, (nav.v_n - v_d)[0:2], r)
+        h = meas.h if phi_acc is None else solve(phi_acc.T, meas.h.T).T
         gate = self.cfg.gate_chi2 if self.cfg.gate_chi2 > 0.0 else None
         try:
-            res = self.kf.update(meas.z, meas.h, meas.r, gate)
+            res = self.kf.update(meas.z, h, meas.r, gate)
             self._check_health()
         except (np.linalg.LinAlgError, FloatingPointError, ValueError, NumericalBreakdownError) as e:
             self._fail(f'update: {e}')
@@ -572,8 +583,8 @@ class TransferAlignment:
         x = self.kf.x
         self.last_x = x.copy()
         zero = np.zeros(3)
-        match = Match(c_m=np.eye(3), w_m=zero, r=zero, u_n=zero, v_ref=v_d, z_vel=zero, r_vel=np.eye(3), ins=st)
-        self.kf.x = self.model.feedback(x, self.kf.P, match, st, self.corr)
+        match = Match(c_m=np.eye(3), w_m=zero, r=zero, u_n=zero, v_ref=v_d, z_vel=zero, r_vel=np.eye(3), ins=nav)
+        self.kf.x, _ = self._feed_back(x, self.kf.P, match, nav)
         self.t_doppler_update = t
 
     def _lever_arm(self, deck_disp: np.ndarray) -> np.ndarray:
@@ -707,7 +718,6 @@ class TransferAlignment:
         so the measurement matrix is H Phi^-1 (identity at zero latency). The estimate is fed
         back into the live solution, and the same correction into the stored past ones."""
         nav, phi_acc = past
-        live = self.ins.s
         z_vel = nav.v_n - v_ref
         if self.lowpass is not None:
             z_vel = self.lowpass.step(z_vel)
@@ -731,7 +741,17 @@ class TransferAlignment:
         x = self.kf.x
         self.last_x = x.copy()
         p = self.kf.P
-        self.history.prune(t_v, self.t_ins)       # no later match needs the solutions before t_v
+        # no later master match needs the solutions before t_v (a later Doppler sample may)
+        self.history.prune(min(t_v, self.t_ins - self.doppler_lat_ns), self.t_ins)
+        x_new, nav = self._feed_back(x, p, match, nav)
+        self.kf.x = x_new
+        self.mu, self.mu_sigma = self.model.misalignment(x_new, p, match, nav, self.corr)
+
+    def _feed_back(self, x: np.ndarray, p: np.ndarray, match: Match, nav: NavState) -> tuple[np.ndarray, NavState]:
+        """Apply the estimate to the live solution (the model's feedback) and the same correction
+        to the stored past ones; return the state the filter keeps and `nav` (the solution at the
+        match's validity time) corrected."""
+        live = self.ins.s
         q0, v0, pos0 = live.q_nb, live.v_n, (live.lat, live.lon, live.h)
         x_new = self.model.feedback(x, p, match, live, self.corr)
         if self.lowpass is not None:
@@ -745,8 +765,7 @@ class TransferAlignment:
                 q = quat_mul(q_corr, nav.q_nb)
                 nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + dv, lat=nav.lat + dpos[0],
                                lon=nav.lon + dpos[1], h=nav.h + dpos[2])
-        self.kf.x = x_new
-        self.mu, self.mu_sigma = self.model.misalignment(x_new, p, match, nav, self.corr)
+        return x_new, nav
 
     def _emit(self, t: int) -> None:
         st = self.ins.s
