@@ -26,7 +26,9 @@ def _release(sc):
 
 def test_launch_noise_is_added_to_the_velocity_states_in_its_window_only():
     """Qd gains q^2 h on dV_E, dV_N, dV_U (nothing else) for the IMU steps ending within
-    launch_noise_s after the LDV's launch detection, and nothing before or after."""
+    launch_noise_s after the launch (dated at the first LDV sample above the threshold), and
+    nothing before or after; the steps that ran while the launch was being confirmed
+    (launch_confirm_samples - 1 of them) get theirs at once in P at the confirmation."""
     sc = scenario.load('catapult', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 2.0,
                                     'filter.launch_accel_noise_mps2': 0.3, 'filter.launch_noise_s': 0.25})
     inp = pipeline.simulate(sc)
@@ -50,10 +52,11 @@ def test_launch_noise_is_added_to_the_velocity_states_in_its_window_only():
     assert t_l == first_moving
     dv = np.zeros(15)
     dv[3:6] = 0.3 ** 2 * 0.01
+    confirmed = t_l + (sc.filter.launch_confirm_samples - 1) * 10_000_000
     for t, q in extra.items():
-        want = np.diag(dv) if t_l < t <= t_l + 250_000_000 else np.zeros((15, 15))
+        want = np.diag(dv) if confirmed < t <= t_l + 250_000_000 else np.zeros((15, 15))
         np.testing.assert_allclose(q, want, rtol=1e-12, atol=1e-20)
-    assert sum(np.any(q) for q in extra.values()) == 25
+    assert sum(np.any(q) for q in extra.values()) == 25 - (sc.filter.launch_confirm_samples - 1)
 
 
 def test_launch_noise_makes_the_kf_honest_under_vibration():

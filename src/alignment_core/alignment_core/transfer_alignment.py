@@ -31,8 +31,11 @@ after it are replayed. Lever-arm treatment
 reference; `none` leaves it out; `butterworth` leaves it out and low-pass filters the velocity
 difference (filters/lowpass.py: a lag the error model does not contain). The aircraft is
 parked (zero deck velocity, surveyed spot) until the LDV sees it move; from then on its deck
-displacement is the integral of the LDV velocity. Closed loop: each update is fed back into
-the strapdown (the model's `feedback`).
+displacement is the integral of the LDV velocity. It moves when `launch_confirm_samples` LDV
+samples in a row exceed `launch_detect_mps` (the launch, dated at the first of them: one noisy
+sample is not a launch) or when the median of the last `creep_window_samples` exceeds
+`creep_detect_mps` (hold-back creep, taxiing: slow motion that is not the launch). Closed loop:
+each update is fed back into the strapdown (the model's `feedback`).
 
 Published misalignment (the model's `misalignment`): mu_hat = log((C_m^n C_nom)^T C_a^n_hat),
 the aircraft IMU axes relative to the master's turned by the nominal heading on deck
@@ -146,6 +149,9 @@ class FilterConfig:
     master_velocity_sigma_mps: float = 0.001
     parked_velocity_sigma_mps: float = 0.005
     launch_detect_mps: float = 0.05
+    launch_confirm_samples: int = 3           # LDV samples in a row above launch_detect_mps that make a launch
+    creep_detect_mps: float = 0.02            # slow deck motion: median LDV speed above this (0 = off)
+    creep_window_samples: int = 25            # ... over this many valid samples
     algorithm: Literal['kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud',
                        'combined', 'ekf', 'ukf', 'ckf'] = 'kf'
     float32: bool = False
@@ -188,6 +194,11 @@ class FilterConfig:
         for k in ('arw_dpsh', 'vrw_ugpshz', 'gyro_bias_rw_dphps', 'accel_bias_rw_ugps',
                   'master_velocity_sigma_mps', 'gate_chi2'):
             require(getattr(self, k) >= 0.0, f"{k} must be >= 0, got {getattr(self, k)}")
+        require(self.creep_detect_mps >= 0.0, f"creep_detect_mps must be >= 0 (0 = off), got {self.creep_detect_mps}")
+        require(3 <= self.creep_window_samples <= 10000,
+                f"creep_window_samples must be in [3, 10000], got {self.creep_window_samples}")
+        require(1 <= self.launch_confirm_samples <= 100,
+                f"launch_confirm_samples must be in [1, 100], got {self.launch_confirm_samples}")
         require(self.max_gap_factor > 1.0, f"max_gap_factor must be > 1, got {self.max_gap_factor}")
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
                 f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
@@ -279,6 +290,7 @@ class Counters:
     unmatched_master: int = 0         # master samples with no slave solution at their validity time
     unmatched_doppler: int = 0        # Doppler samples with no slave solution at their validity time
     numerical_failures: int = 0       # breakdowns of the filter (non-finite or non-PD covariance)
+    creep_detected: int = 0           # slow deck motion seen before the launch (LDV in the reference from then)
     rate_unmatched: int = 0           # rate matching: matches without a gyro interval / master pair to compare
     extra: dict = field(default_factory=dict)
 
@@ -394,6 +406,11 @@ class TransferAlignment:
             maxlen=int(span / (self.imu_dt_nominal * 1e9)) + 8)     # (t_end, h, raw gyro rate, dv_n)
         self.prev_master: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None   # t_v, C_m, v_b, w_b
         self.moving = False
+        self.held_ldv: list[LdvSample] = []       # LDV samples above the launch threshold, not yet confirmed
+        self.held_fast = 0
+        self.t_moving: int | None = None          # validity time from which the aircraft moves on the deck
+        self.fast_run: list[int] = []             # stamps of fast samples in a row while creeping
+        self.recent_ldv: deque[np.ndarray] = deque(maxlen=max(cfg.creep_window_samples, 1))
         self.ins: Strapdown | None = None
         self.kf: KalmanFilter | None = None
         self.t_ins: int | None = None
@@ -455,6 +472,9 @@ class TransferAlignment:
         for stream, t, item in events:
             getattr(self, '_on_' + stream)(t, item)
         if final:
+            held, self.held_ldv, self.held_fast = self.held_ldv, [], 0
+            for h in held:                         # an unconfirmed run at the end: parked
+                self._record_ldv(h)
             self._match_pending(final=True)
         return self.outputs[n0:]
 
@@ -533,23 +553,80 @@ class TransferAlignment:
             self._fail(f'predict: {e}')
 
     def _on_ldv(self, t: int, s: LdvSample) -> None:
-        """Parked (held back) until the LDV first reads more than `launch_detect_mps`: until
-        then the aircraft's deck velocity is zero and its spot fixed, so LDV noise is neither
-        integrated into the lever arm (a random walk of ~2 cm over 300 s, which through
-        w' x dr looks like tens of ug) nor added to the reference velocity. Each sample is
-        kept by its validity time (stamp - ldv_latency_s) for the master's lookup."""
+        """Parked (held back) until the LDV reads more than `launch_detect_mps` on
+        `launch_confirm_samples` valid samples in a row: until then the aircraft's deck velocity
+        is zero and its spot fixed, so LDV noise is neither integrated into the lever arm (a
+        random walk of ~2 cm over 300 s, which through w' x dr looks like tens of ug) nor added
+        to the reference velocity. One noisy sample is not a launch (a 1 cm/s LDV exceeds 5 cm/s
+        in |v| about once a minute at 100 Hz): samples above the threshold are held back (the
+        master matches wait for them) until the run is confirmed, then recorded as moving from
+        the first of them, or released as parked when a slower one breaks the run. Each sample
+        is kept by its validity time (stamp - ldv_latency_s) for the master's lookup."""
         self.counters.ldv += 1
+        fast = s.valid and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps
+        if s.valid:
+            self.recent_ldv.append(s.v_s)
+        if self.moving and self.t_launch is None:     # creeping: watch for the stroke (launch noise)
+            med = np.median(np.asarray(self.recent_ldv), axis=0) if self.recent_ldv else np.zeros(3)
+            if s.valid and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps + float(np.sqrt(med @ med)):
+                self.fast_run.append(s.t_ns)
+                if len(self.fast_run) >= self.cfg.launch_confirm_samples:
+                    self._launch(self.fast_run[0] - self.ldv_lat_ns)
+            elif s.valid:
+                self.fast_run.clear()
+        if not self.moving:
+            if fast or (self.held_ldv and not s.valid):
+                self.held_ldv.append(s)
+                self.held_fast += fast
+                if self.held_fast < self.cfg.launch_confirm_samples:
+                    return
+                self._launch(self.held_ldv[0].t_ns - self.ldv_lat_ns)
+            elif self._creeping():
+                self.moving = True
+                self.t_moving = t - self.ldv_lat_ns
+                self.counters.creep_detected += 1
+            if self.held_ldv:
+                held, self.held_ldv, self.held_fast = self.held_ldv, [], 0
+                for h in held:
+                    self._record_ldv(h)
+                if fast:
+                    if self.pending:
+                        self._match_pending()
+                    return
+        self._record_ldv(s)
+        if self.pending:
+            self._match_pending()
+
+    def _creeping(self) -> bool:
+        """Slow deck motion (hold-back creep, taxiing): the per-axis median of the last
+        `creep_window_samples` valid LDV samples exceeds `creep_detect_mps` in norm (the median
+        ignores single spikes; for a 1 cm/s LDV and 25 samples its noise is ~2.5 mm/s per axis)."""
+        w = self.cfg.creep_window_samples
+        if self.cfg.creep_detect_mps <= 0.0 or len(self.recent_ldv) < w:
+            return False
+        med = np.median(np.asarray(self.recent_ldv), axis=0)
+        return float(np.sqrt(med @ med)) > self.cfg.creep_detect_mps
+
+    def _launch(self, t_v: int) -> None:
+        """The launch, first seen at validity time t_v: moving from then on; the launch noise
+        of the IMU steps already propagated past t_v goes into P at once (velocity noise)."""
+        if not self.moving:
+            self.moving = True
+            self.t_moving = t_v
+        self.t_launch = t_v
+        if self.q_launch is not None and self.kf is not None and self.healthy and self.t_ins > t_v:
+            late = min(self.t_ins - t_v, self.launch_ns) * 1e-9
+            self.kf.P = self.kf.P + self.q_launch * late
+
+    def _record_ldv(self, s: LdvSample) -> None:
+        """Integrate the deck displacement (when moving) and keep the sample by validity time."""
+        t = s.t_ns
         t_v = t - self.ldv_lat_ns
         prev = self.last_ldv
-        if s.valid and not self.moving and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps:
-            self.moving = True
-            self.t_launch = t_v
         if self.moving and s.valid and prev is not None and prev.valid:
             self.deck_disp = self.deck_disp + 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
         self.last_ldv = s
         self.ldv_history.record(LdvRecord(t_v, s.v_s, s.valid, self.moving, self.deck_disp))
-        if self.pending:
-            self._match_pending()
 
     def _on_doppler(self, t: int, s: DopplerSample) -> None:
         """Match the slave velocity to the radar's, resolved with the slave's own attitude, at
