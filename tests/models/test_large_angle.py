@@ -104,9 +104,15 @@ def test_open_loop_nonlinear_filters_are_consistent_where_the_kf_is_not(seed):
 
 @pytest.fixture(scope='module')
 def calm_sea_large_yaw():
+    # seed 000's filter: no known-event launch noise, the default 5 mm/s parked allowance (the
+    # catapult scenario's own tuning is for the 15-state filter), and the launch taken at the first
+    # LDV sample: a nonlinear model has no transition matrices for the delay-aware update, so the
+    # two matches that wait for a 3-sample launch confirmation would meet the live error state
+    # (known limitation, transfer_alignment.py; it moves these filters' tilt by ~0.1')
     ov = {'ship.sea_state': 0, 'duration_s': 10.0, 'aircraft.catapult.launch_time_s': 6.0,
           'aircraft.misalignment_arcmin': [15.0, -10.0, 600.0], 'filter.init_yaw_sigma_deg': 10.0,
-          'filter.model': 'seed000_large_angle'}
+          'filter.model': 'seed000_large_angle', 'filter.launch_accel_noise_mps2': 0.0,
+          'filter.parked_velocity_sigma_mps': 0.005, 'filter.launch_confirm_samples': 1}
     return ov
 
 

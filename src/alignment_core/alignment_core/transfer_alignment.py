@@ -34,7 +34,10 @@ parked (zero deck velocity, surveyed spot) until the LDV sees it move; from then
 displacement is the integral of the LDV velocity. It moves when `launch_confirm_samples` LDV
 samples in a row exceed `launch_detect_mps` (the launch, dated at the first of them: one noisy
 sample is not a launch) or when the median of the last `creep_window_samples` exceeds
-`creep_detect_mps` (hold-back creep, taxiing: slow motion that is not the launch). Closed loop:
+`creep_detect_mps` (hold-back creep, taxiing: slow motion that is not the launch); the master
+matches wait for the confirmation. Known limitation: a nonlinear model (seed000_large_angle) has
+no transition matrices, so a match made after the slave moved on (a latency, or the two matches
+that wait for the launch confirmation) meets the live error state without H Phi^-1. Closed loop:
 each update is fed back into the strapdown (the model's `feedback`).
 
 Published misalignment (the model's `misalignment`): mu_hat = log((C_m^n C_nom)^T C_a^n_hat),
