@@ -414,6 +414,7 @@ class TransferAlignment:
         self.t_moving: int | None = None          # validity time from which the aircraft moves on the deck
         self.fast_run: list[int] = []             # stamps of fast samples in a row while creeping
         self.recent_ldv: deque[np.ndarray] = deque(maxlen=max(cfg.creep_window_samples, 1))
+        self.recent_sum = np.zeros(3)             # running sum of recent_ldv (a cheap trigger for the median)
         self.ins: Strapdown | None = None
         self.kf: KalmanFilter | None = None
         self.t_ins: int | None = None
@@ -568,7 +569,11 @@ class TransferAlignment:
         self.counters.ldv += 1
         fast = s.valid and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps
         if s.valid:
-            self.recent_ldv.append(s.v_s)
+            rl = self.recent_ldv
+            if len(rl) == rl.maxlen:
+                self.recent_sum -= rl[0]
+            rl.append(s.v_s)
+            self.recent_sum += s.v_s
         if self.moving and self.t_launch is None:     # creeping: watch for the stroke (launch noise)
             med = np.median(np.asarray(self.recent_ldv), axis=0) if self.recent_ldv else np.zeros(3)
             if s.valid and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps + float(np.sqrt(med @ med)):
@@ -606,6 +611,9 @@ class TransferAlignment:
         ignores single spikes; for a 1 cm/s LDV and 25 samples its noise is ~2.5 mm/s per axis)."""
         w = self.cfg.creep_window_samples
         if self.cfg.creep_detect_mps <= 0.0 or len(self.recent_ldv) < w:
+            return False
+        mean = self.recent_sum / w           # the median is only worth computing when the mean moves
+        if float(np.sqrt(mean @ mean)) <= 0.5 * self.cfg.creep_detect_mps:
             return False
         med = np.median(np.asarray(self.recent_ldv), axis=0)
         return float(np.sqrt(med @ med)) > self.cfg.creep_detect_mps
