@@ -76,7 +76,7 @@ def start(name: str, params: Path, out: Path, *args: str) -> subprocess.Popen:
     cmd = [str(root() / 'scripts' / 'start_node.sh'), name, '--params-file', str(params),
            '--ros-args', '-p', f'stats_path:={out / "stats" / (name + ".json")}', *args]
     if name in MATCHED and not any('hold_until_matched' in x for x in args):
-        cmd += ['-p', _list_param('hold_until_matched', MATCHED[name])]
+        cmd += ['-p', _list_param('hold_until_matched', MATCHED[name]), '-p', 'hold_for_node:=recorder']
     return subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
 
 

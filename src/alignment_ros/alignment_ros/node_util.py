@@ -39,6 +39,11 @@ class CountingNode(Node):
         self.declare_parameter('hold_until_matched', [''], ParameterDescriptor(
             description="'topic:count' pairs: hold this node's messages on topic until its "
                         "publisher has matched count subscriptions (no message into the void)"))
+        self.declare_parameter('hold_for_node', '', ParameterDescriptor(
+            description="with hold_until_matched: also wait until this node (the recorder) has a "
+                        "matched subscription on the topic; the count alone can be met by an extra "
+                        "subscriber such as echo.sh, and the recorder would miss the first messages"))
+        self._hold_node: str = self.get_parameter('hold_for_node').value
         self._pubs: dict[str, object] = {}
         self._need: dict[str, int] = {}
         for item in self.get_parameter('hold_until_matched').value:
@@ -57,10 +62,25 @@ class CountingNode(Node):
         self._pubs[topic] = pub
         return pub
 
+    def _matched(self, topic: str) -> bool:
+        """The topic's publisher has its count of subscriptions and, with hold_for_node, every
+        subscription discovered on the topic (that node's among them) is matched."""
+        pub = self._pubs.get(topic)
+        if pub is None:
+            return False
+        n = pub.get_subscription_count()
+        if n < self._need[topic]:
+            return False
+        if self._hold_node:
+            infos = self.get_subscriptions_info_by_topic(topic)
+            if n < len(infos) or not any(i.node_name == self._hold_node for i in infos):
+                return False
+        return True
+
     def send(self, topic: str, msg) -> None:
         need = self._need.get(topic)
         if need is not None:
-            if self._pubs[topic].get_subscription_count() < need:
+            if not self._matched(topic):
                 self._held.setdefault(topic, []).append(msg)
                 return
             del self._need[topic]
@@ -73,8 +93,7 @@ class CountingNode(Node):
     def flush_held(self) -> None:
         """Publish held messages of every topic whose subscribers have now matched."""
         for topic in list(self._need):
-            if self._pubs.get(topic) is not None and \
-                    self._pubs[topic].get_subscription_count() >= self._need[topic]:
+            if self._matched(topic):
                 del self._need[topic]
                 for m in self._held.pop(topic, []):
                     self._pubs[topic].publish(m)

@@ -95,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
                                            [topics.ALIGN_MISALIGNMENT], expect_counts=expect)
         end_reached = watch_end_time(procs['recorder'])
         procs['alignment_filter_node'] = start('alignment_filter_node', params, out,
-                                                '-p', HOLD)
+                                                '-p', HOLD, '-p', 'hold_for_node:=recorder')
         _wait_graph()
         player = subprocess.run(
             [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/player'), str(bag),
