@@ -567,7 +567,8 @@ class TransferAlignment:
         the first of them, or released as parked when a slower one breaks the run. Each sample
         is kept by its validity time (stamp - ldv_latency_s) for the master's lookup."""
         self.counters.ldv += 1
-        fast = s.valid and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps
+        speed = float(np.sqrt(s.v_s @ s.v_s)) if s.valid else 0.0
+        fast = speed > self.cfg.launch_detect_mps
         if s.valid:
             rl = self.recent_ldv
             if len(rl) == rl.maxlen:
@@ -575,8 +576,7 @@ class TransferAlignment:
             rl.append(s.v_s)
             self.recent_sum += s.v_s
         if self.moving and self.t_launch is None:     # creeping: watch for the stroke (launch noise)
-            med = np.median(np.asarray(self.recent_ldv), axis=0) if self.recent_ldv else np.zeros(3)
-            if s.valid and float(np.sqrt(s.v_s @ s.v_s)) > self.cfg.launch_detect_mps + float(np.sqrt(med @ med)):
+            if s.valid and speed > self.cfg.launch_detect_mps + self._median_speed():
                 self.fast_run.append(s.t_ns)
                 if len(self.fast_run) >= self.cfg.launch_confirm_samples:
                     self._launch(self.fast_run[0] - self.ldv_lat_ns)
@@ -615,8 +615,14 @@ class TransferAlignment:
         mean = self.recent_sum / w           # the median is only worth computing when the mean moves
         if float(np.sqrt(mean @ mean)) <= 0.5 * self.cfg.creep_detect_mps:
             return False
+        return self._median_speed() > self.cfg.creep_detect_mps
+
+    def _median_speed(self) -> float:
+        """|per-axis median| of the recent valid LDV samples (0 with none)."""
+        if not self.recent_ldv:
+            return 0.0
         med = np.median(np.asarray(self.recent_ldv), axis=0)
-        return float(np.sqrt(med @ med)) > self.cfg.creep_detect_mps
+        return float(np.sqrt(med @ med))
 
     def _launch(self, t_v: int) -> None:
         """The launch, first seen at validity time t_v: moving from then on; the launch noise

@@ -201,3 +201,83 @@ def relative_misalignment(c_m: np.ndarray, c_na: np.ndarray, p_rel: np.ndarray
     """mu = log(C_m^T C_a) (aircraft axes) and its 1-sigma from the nav-frame covariance p_rel
     of the relative attitude error, rotated to aircraft axes."""
     return dcm_to_rotvec_small(c_m.T @ c_na), np.sqrt(np.diag(c_na.T @ p_rel @ c_na))
+
+
+class ModelWrapper(ErrorModel):
+    """A matching option around a model (models/__init__.py): every method delegates to `base`;
+    a subclass overrides what its option changes (rows, states, outputs)."""
+
+    def __init__(self, base: ErrorModel, suffix: str) -> None:
+        self.base = base
+        self.name = base.name + suffix
+        self.labels, self.kinds = base.labels, base.kinds
+        self.attitude, self.velocity_rows, self.attitude_rows = base.attitude, base.velocity_rows, base.attitude_rows
+
+    def initial_covariance(self) -> np.ndarray:
+        return self.base.initial_covariance()
+
+    def continuous(self, p: Propagation) -> np.ndarray:
+        return self.base.continuous(p)
+
+    def transition(self, p: Propagation) -> np.ndarray:
+        return self.base.transition(p)
+
+    def process_noise(self, h: float) -> np.ndarray:
+        return self.base.process_noise(h)
+
+    def measurement(self, m: Match, corr: Corrections) -> Measurement:
+        return self.base.measurement(m, corr)
+
+    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        return self.base.feedback(x, p, m, nav, corr)
+
+    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
+        return self.base.misalignment(x, p, m, nav, corr)
+
+
+class AugmentedModel(ModelWrapper):
+    """`base` + random-constant states appended (dx' = 0, no process noise, prior `sigma` each):
+    Phi, Qd and P0 grow by a block; the base keeps its own states. Subclasses add the
+    measurement columns and say what feedback does with the new states."""
+
+    def __init__(self, base: ErrorModel, suffix: str, labels: tuple[str, ...], sigma: float) -> None:
+        if base.nonlinear:
+            raise ValueError(f'{suffix.lstrip("+")} states need a linear base model, not {base.name}')
+        super().__init__(base, suffix)
+        self.labels = base.labels + labels
+        self.kinds = base.kinds + (OTHER,) * len(labels)
+        self.nb = base.n
+        self.sigma = float(sigma)
+        self._qd: dict[float, np.ndarray] = {}
+
+    def _grow(self, a: np.ndarray, corner: float) -> np.ndarray:
+        out = np.zeros((self.n, self.n))
+        out[:self.nb, :self.nb] = a
+        k = np.arange(self.nb, self.n)
+        out[k, k] = corner
+        return out
+
+    def initial_covariance(self) -> np.ndarray:
+        return self._grow(self.base.initial_covariance(), self.sigma ** 2)
+
+    def continuous(self, p: Propagation) -> np.ndarray:
+        return self._grow(self.base.continuous(p), 0.0)
+
+    def transition(self, p: Propagation) -> np.ndarray:
+        return self._grow(self.base.transition(p), 1.0)
+
+    def process_noise(self, h: float) -> np.ndarray:
+        qd = self._qd.get(h)
+        if qd is None:
+            qd = self._qd[h] = self._grow(self.base.process_noise(h), 0.0)
+        return qd
+
+    def base_measurement(self, m: Match, corr: Corrections) -> Measurement:
+        """The base's measurement with H widened by zero columns for the appended states."""
+        z, h, r, _ = self.base.measurement(m, corr)
+        hh = np.zeros((h.shape[0], self.n))
+        hh[:, :self.nb] = h
+        return Measurement(z, hh, r)
+
+    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
+        return self.base.misalignment(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

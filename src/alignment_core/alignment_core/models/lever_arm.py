@@ -15,51 +15,17 @@ import numpy as np
 
 from ..attitude import skew
 from ..strapdown import NavState
-from .base import OTHER, Corrections, ErrorModel, Match, Measurement, Propagation
+from .base import AugmentedModel, Corrections, ErrorModel, Match, Measurement
 
 
-class LeverArmStates(ErrorModel):
+class LeverArmStates(AugmentedModel):
     """`base` + dr (3); every method delegates to `base` for its own states."""
 
     def __init__(self, base: ErrorModel, sigma_m: float) -> None:
-        if base.nonlinear:
-            raise ValueError('lever-arm states need a linear base model')
-        self.base = base
-        self.name = base.name + '+lever_arm'
-        self.labels = base.labels + ('dr_x', 'dr_y', 'dr_z')
-        self.kinds = base.kinds + (OTHER,) * 3
-        self.attitude = base.attitude
-        self.velocity_rows = base.velocity_rows
-        self.attitude_rows = base.attitude_rows
-        self.nb = base.n
-        self.sigma = float(sigma_m)
-        self._qd: dict[float, np.ndarray] = {}
-
-    def _grow(self, a: np.ndarray, corner: float) -> np.ndarray:
-        out = np.zeros((self.nb + 3, self.nb + 3))
-        out[:self.nb, :self.nb] = a
-        out[self.nb:, self.nb:] = corner * np.eye(3)
-        return out
-
-    def initial_covariance(self) -> np.ndarray:
-        return self._grow(self.base.initial_covariance(), self.sigma ** 2)
-
-    def continuous(self, p: Propagation) -> np.ndarray:
-        return self._grow(self.base.continuous(p), 0.0)
-
-    def transition(self, p: Propagation) -> np.ndarray:
-        return self._grow(self.base.transition(p), 1.0)
-
-    def process_noise(self, h: float) -> np.ndarray:
-        qd = self._qd.get(h)
-        if qd is None:
-            qd = self._qd[h] = self._grow(self.base.process_noise(h), 0.0)
-        return qd
+        super().__init__(base, '+lever_arm', ('dr_x', 'dr_y', 'dr_z'), sigma_m)
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
-        z, h, r, _ = self.base.measurement(m, corr)
-        hh = np.zeros((h.shape[0], self.nb + 3))
-        hh[:, :self.nb] = h
+        z, hh, r = self.base_measurement(m, corr)[:3]
         cw = m.c_m @ skew(m.w_m)
         for row, axis in enumerate(self.velocity_rows):
             hh[row, self.nb:] = cw[axis]
@@ -69,6 +35,3 @@ class LeverArmStates(ErrorModel):
         xb = self.base.feedback(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)
         corr.dr = corr.dr + x[self.nb:]
         return np.concatenate([xb, np.zeros(3)])
-
-    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
-        return self.base.misalignment(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

@@ -24,45 +24,15 @@ from dataclasses import replace
 import numpy as np
 
 from ..strapdown import NavState
-from .base import OTHER, Corrections, ErrorModel, Match, Measurement, Propagation, rotation_matrix
+from .base import AugmentedModel, Corrections, ErrorModel, Match, Measurement, rotation_matrix
 from .rate_matching import mid_interval_attitude
 
 
-class MasterDelayState(ErrorModel):
+class MasterDelayState(AugmentedModel):
     """`base` + dt_master (1), prior sigma `sigma_s`, dt' = 0."""
 
     def __init__(self, base: ErrorModel, sigma_s: float) -> None:
-        if base.nonlinear:
-            raise ValueError('the master delay state needs a linear base model')
-        self.base = base
-        self.name = base.name + '+delay'
-        self.labels = base.labels + ('dt_master',)
-        self.kinds = base.kinds + (OTHER,)
-        self.attitude, self.velocity_rows, self.attitude_rows = base.attitude, base.velocity_rows, base.attitude_rows
-        self.nb = base.n
-        self.sigma = float(sigma_s)
-        self._qd: dict[float, np.ndarray] = {}
-
-    def _grow(self, a: np.ndarray, corner: float) -> np.ndarray:
-        out = np.zeros((self.nb + 1, self.nb + 1))
-        out[:self.nb, :self.nb] = a
-        out[self.nb, self.nb] = corner
-        return out
-
-    def initial_covariance(self) -> np.ndarray:
-        return self._grow(self.base.initial_covariance(), self.sigma ** 2)
-
-    def continuous(self, p: Propagation) -> np.ndarray:
-        return self._grow(self.base.continuous(p), 0.0)
-
-    def transition(self, p: Propagation) -> np.ndarray:
-        return self._grow(self.base.transition(p), 1.0)
-
-    def process_noise(self, h: float) -> np.ndarray:
-        qd = self._qd.get(h)
-        if qd is None:
-            qd = self._qd[h] = self._grow(self.base.process_noise(h), 0.0)
-        return qd
+        super().__init__(base, '+delay', ('dt_master',), sigma_s)
 
     def column(self, m: Match, rows: int) -> np.ndarray:
         """dz/d(dt) for a measurement of `rows` rows (velocity, attitude, then rate rows)."""
@@ -77,11 +47,9 @@ class MasterDelayState(ErrorModel):
         return col
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
-        z, h, r, _ = self.base.measurement(m, corr)
-        hh = np.zeros((h.shape[0], self.nb + 1))
-        hh[:, :self.nb] = h
-        hh[:, self.nb] = self.column(m, h.shape[0])
-        return Measurement(z, hh, r)
+        meas = self.base_measurement(m, corr)
+        meas.h[:, self.nb] = self.column(m, len(meas.z))
+        return meas
 
     def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         xb = self.base.feedback(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

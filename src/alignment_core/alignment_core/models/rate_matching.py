@@ -30,8 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..strapdown import NavState, quat_to_dcm
-from .base import Corrections, ErrorModel, Match, Measurement, Propagation, rotation_matrix, skew_into
+from ..strapdown import quat_to_dcm
+from .base import Corrections, ErrorModel, Match, Measurement, ModelWrapper, rotation_matrix, skew_into
 
 PHI_LABELS = ('phi_E', 'phi_N', 'phi_U')
 EPS_LABELS = ('eps_x', 'eps_y', 'eps_z')
@@ -59,36 +59,20 @@ def mid_interval_attitude(m: Match) -> np.ndarray:
     return quat_to_dcm(m.ins.q_nb) @ rotation_matrix(-0.5 * m.rate.dtheta)
 
 
-class RateMatching(ErrorModel):
+class RateMatching(ModelWrapper):
     """`base` + rate rows (module docstring). The states are the base's; rows are added at
     matches that carry `rate` inputs (from the second master sample on the IMU grid)."""
 
     def __init__(self, base: ErrorModel, arw: float, sigma_w: float) -> None:
         if not supports_rate_matching(base):
             raise ValueError(f'rate matching needs a linear model with phi and eps states, not {base.name}')
-        self.base = base
-        self.name = base.name + '+rate'
-        self.labels, self.kinds = base.labels, base.kinds
-        self.attitude, self.velocity_rows, self.attitude_rows = base.attitude, base.velocity_rows, base.attitude_rows
+        super().__init__(base, '+rate')
         self.i_phi = _block(base.labels, PHI_LABELS)
         self.i_eps = _block(base.labels, EPS_LABELS)
         self.i_phi_m = _block(base.labels, PHI_M_LABELS)
         self.i_theta_dot = _block(base.labels, THETA_DOT_LABELS)
         self.arw2 = float(arw) ** 2
         self.sigma2 = float(sigma_w) ** 2
-        self.rate_rows = 0
-
-    def initial_covariance(self) -> np.ndarray:
-        return self.base.initial_covariance()
-
-    def continuous(self, p: Propagation) -> np.ndarray:
-        return self.base.continuous(p)
-
-    def transition(self, p: Propagation) -> np.ndarray:
-        return self.base.transition(p)
-
-    def process_noise(self, h: float) -> np.ndarray:
-        return self.base.process_noise(h)
 
     def rate_rows_of(self, m: Match) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(z_w (3,), H_w (3, n), R_w (3, 3)) at a match with rate inputs."""
@@ -116,18 +100,10 @@ class RateMatching(ErrorModel):
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
         meas = self.base.measurement(m, corr)
         if m.rate is None:
-            self.rate_rows = 0
             return meas
         z_w, h_w, r_w = self.rate_rows_of(m)
         k = len(meas.z)
         r = np.zeros((k + 3, k + 3))
         r[:k, :k] = meas.r
         r[k:, k:] = r_w
-        self.rate_rows = 3
         return Measurement(np.concatenate([meas.z, z_w]), np.vstack([meas.h, h_w]), r)
-
-    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
-        return self.base.feedback(x, p, m, nav, corr)
-
-    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
-        return self.base.misalignment(x, p, m, nav, corr)

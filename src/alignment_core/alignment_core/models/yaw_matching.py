@@ -12,43 +12,21 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..strapdown import NavState
-from .base import Corrections, ErrorModel, Match, Measurement, Propagation
+from .base import Corrections, ErrorModel, Match, Measurement, ModelWrapper
 
 
-class YawMatching(ErrorModel):
+class YawMatching(ModelWrapper):
     """`base` (velocity rows + attitude rows for all three nav axes) keeping the U attitude row."""
 
     def __init__(self, base: ErrorModel) -> None:
         if tuple(base.attitude_rows) != (0, 1, 2):
             raise ValueError(f'yaw matching needs a model with attitude rows (seed003_21/24), not {base.name}')
-        self.base = base
-        self.name = base.name + '+yaw_only'
-        self.labels, self.kinds, self.attitude = base.labels, base.kinds, base.attitude
-        self.velocity_rows = base.velocity_rows
+        super().__init__(base, '+yaw_only')
         self.attitude_rows = (2,)
         nv = len(base.velocity_rows)
         self.keep = np.array(list(range(nv)) + [nv + 2])
-
-    def initial_covariance(self) -> np.ndarray:
-        return self.base.initial_covariance()
-
-    def continuous(self, p: Propagation) -> np.ndarray:
-        return self.base.continuous(p)
-
-    def transition(self, p: Propagation) -> np.ndarray:
-        return self.base.transition(p)
-
-    def process_noise(self, h: float) -> np.ndarray:
-        return self.base.process_noise(h)
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
         z, h, r, _ = self.base.measurement(m, corr)
         k = self.keep
         return Measurement(z[k], h[k], r[np.ix_(k, k)])
-
-    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
-        return self.base.feedback(x, p, m, nav, corr)
-
-    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
-        return self.base.misalignment(x, p, m, nav, corr)
