@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg as sla
 
-from alignment_core.filters import (
+from alignment_core.estimation.filters import (
     CarlsonFilter,
     CubatureKalmanFilter,
     ExtendedKalmanFilter,
@@ -195,8 +195,9 @@ ENGINE_CASES = {
 
 
 def engine_run(seconds: float, repeat: int) -> None:
-    from alignment_core import pipeline, scenario
-    from alignment_core.transfer_alignment import TransferAlignment
+    from alignment_core import pipeline
+    from alignment_core.config import scenario
+    from alignment_core.estimation.engine import TransferAlignment
     kf_us = min(time_filter(FILTERS['KalmanFilter (Joseph)'], workload(21, 6, 2000), False) for _ in range(repeat))
     print(f'TransferAlignment per IMU step + match, deck scenario, {seconds:g} s at 100 Hz, best of {repeat}; '
           f'bare KF step (n=21, m=6): {kf_us:.1f} us')

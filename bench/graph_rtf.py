@@ -20,8 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from alignment_core import pipeline, scenario
-from alignment_core.filters.kalman import KalmanFilter
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.estimation.filters.kalman import KalmanFilter
 
 ROOT = Path(__file__).resolve().parents[1]
 

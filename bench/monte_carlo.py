@@ -19,7 +19,8 @@ import time
 
 import numpy as np
 
-from alignment_core import pipeline, scenario
+from alignment_core import pipeline
+from alignment_core.config import scenario
 from alignment_experiments import monte_carlo
 
 

@@ -33,7 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from alignment_core import pipeline, scenario
+from alignment_core import pipeline
+from alignment_core.config import scenario
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'tests' / 'ship'))
 

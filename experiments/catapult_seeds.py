@@ -12,8 +12,9 @@ import argparse
 
 import numpy as np
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import ARCMIN
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.units import ARCMIN
 
 
 def score(res: pipeline.BatchResult) -> tuple[np.ndarray, np.ndarray]:

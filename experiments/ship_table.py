@@ -20,8 +20,8 @@ import argparse
 
 import numpy as np
 
-from alignment_core.ship import PAPER_TABLE3_DEG, ShipConfig
-from alignment_core.ship_waves import SpectralShipMotion
+from alignment_core.ship.config import PAPER_TABLE3_DEG, ShipConfig
+from alignment_core.ship.spectral import SpectralShipMotion
 
 RAD2DEG = 180.0 / np.pi
 

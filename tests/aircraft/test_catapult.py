@@ -22,13 +22,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import ARCMIN, DEG, G0
-from alignment_core.catapult import stroke_end_speed, stroke_length
-from alignment_core.config import ConfigError
+from alignment_core import pipeline
+from alignment_core.aircraft.catapult import stroke_end_speed, stroke_length
+from alignment_core.config import scenario
 from alignment_core.samples import ShipBatch
+from alignment_core.units import ARCMIN, DEG, G0
+from alignment_core.validation import ConfigError
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'core'))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'navigation'))
 from test_ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate  # noqa: E402
 
 LAUNCH, T = 2.0, 3.0

@@ -11,12 +11,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import ARCMIN
-from alignment_core.deck_flexure import FlexureConfig, FlexureProcess, gm2_discrete
+from alignment_core import pipeline
+from alignment_core.aircraft.deck_flexure import FlexureConfig, FlexureProcess
+from alignment_core.config import scenario
+from alignment_core.gauss_markov import gm2_discrete
 from alignment_core.samples import ShipBatch
+from alignment_core.units import ARCMIN
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'core'))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'navigation'))
 from test_ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate  # noqa: E402
 
 FLEX = {'aircraft.flexure.enabled': True}

@@ -22,12 +22,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core import earth, pipeline, scenario
-from alignment_core.attitude import DEG
-from alignment_core.config import ConfigError
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.geometry import earth
 from alignment_core.samples import ShipBatch
+from alignment_core.units import DEG
+from alignment_core.validation import ConfigError
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'core'))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'navigation'))
 from test_ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate  # noqa: E402
 
 LAUNCH, STROKE = 2.0, 3.0

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from alignment_core.attitude import DPH
-from alignment_core.sensors import UG, ImuConfig, ImuErrorModel
+from alignment_core.sensors.imu import ImuConfig, ImuErrorModel
+from alignment_core.units import DPH, UG
 
 
 def avar(y, h, ms):

@@ -3,8 +3,9 @@ stated 1-sigma, and what the truth reports."""
 import numpy as np
 import pytest
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import ARCMIN
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.units import ARCMIN
 
 RANDOM = {'aircraft.misalignment_random_arcmin': 20.0, 'aircraft.misalignment_arcmin': [0.0, 0.0, 0.0]}
 

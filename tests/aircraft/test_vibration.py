@@ -19,10 +19,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core import pipeline, scenario
+from alignment_core import pipeline
+from alignment_core.config import scenario
 from alignment_core.samples import ShipBatch
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'core'))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'navigation'))
 from test_ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate  # noqa: E402
 
 A, F, T, P = 10.0, 100.0, 0.1, 45.0

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 import yaml
 
-from alignment_core import pipeline, scenario
+from alignment_core import pipeline
+from alignment_core.config import scenario
 
 ROOT = Path(__file__).resolve().parents[2]
 SETS = ['duration_s=12.0', 'aircraft.catapult.launch_time_s=8.0', 'seed=7']

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from alignment_core import pipeline, scenario
+from alignment_core import pipeline
+from alignment_core.config import scenario
 from alignment_ros.bag import BagReader
 from alignment_ros.replay import replay_topics
 

@@ -18,7 +18,8 @@ from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 
-from alignment_core import pipeline, scenario
+from alignment_core import pipeline
+from alignment_core.config import scenario
 from alignment_ros import convert, domain, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -13,9 +13,10 @@ from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import DEG
-from alignment_core.sensors import MasterInsModel
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.sensors.master_ins import MasterInsModel
+from alignment_core.units import DEG
 from alignment_ros import convert, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import ARCMIN
-from alignment_core.doppler_radar import DopplerConfig, DopplerRadarModel, DopplerStage
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.sensors.doppler_radar import DopplerConfig, DopplerRadarModel, DopplerStage
+from alignment_core.units import ARCMIN
 
 OFF = dict(scale_factor_ppm=0.0, bias_mps=0.0, boresight_azimuth_arcmin=0.0, boresight_pitch_arcmin=0.0,
            drift_angle_arcmin=0.0)

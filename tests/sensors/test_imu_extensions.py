@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from alignment_core.attitude import ARCSEC, DPH, G0
-from alignment_core.imu_errors import UG, ImuConfig, ImuErrorModel
+from alignment_core.sensors.imu import ImuConfig, ImuErrorModel
+from alignment_core.units import ARCSEC, DPH, G0, UG
 
 QUIET = dict(gyro_bias_dph=0.0, accel_bias_ug=0.0, arw_dpsh=0.0, vrw_ugpshz=0.0)
 

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from alignment_core import earth
-from alignment_core.ldv import LdvConfig, LdvModel, LdvStage
+from alignment_core.geometry import earth
 from alignment_core.samples import AircraftTruth, ShipBatch
+from alignment_core.sensors.ldv import LdvConfig, LdvModel, LdvStage
 
 PLANE = earth.TangentPlane(0.7, 2.0, 0.0)
 ORIGIN = np.array([40.0, -10.0, 15.0])

@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import ARCMIN, ARCSEC, DEG, DPH
-from alignment_core.master_ins import MasterConfig, MasterInsModel, MasterInsStage, SchulerErrorModel
+from alignment_core import pipeline
+from alignment_core.config import scenario
 from alignment_core.rng import stage_rng
 from alignment_core.samples import ShipBatch
+from alignment_core.sensors.master_ins import MasterConfig, MasterInsModel, MasterInsStage, SchulerErrorModel
+from alignment_core.units import ARCMIN, ARCSEC, DEG, DPH
 
 UG = 1e-6 * 9.80665
 OMEGA = 7.292115e-5                       # WGS-84 Earth rate

@@ -3,11 +3,11 @@ master INS velocity noise at a given time (the filter is not told)."""
 import numpy as np
 import pytest
 
-from alignment_core.attitude import ARCMIN, DEG
-from alignment_core.config import ConfigError, build
-from alignment_core.deck_flexure import FlexureConfig, FlexureProcess
-from alignment_core.master_ins import MasterConfig, MasterInsModel
+from alignment_core.aircraft.deck_flexure import FlexureConfig, FlexureProcess
 from alignment_core.samples import ShipBatch
+from alignment_core.sensors.master_ins import MasterConfig, MasterInsModel
+from alignment_core.units import ARCMIN, DEG
+from alignment_core.validation import ConfigError, build
 
 
 def test_flexure_intensity_step_scales_the_stationary_sigma():

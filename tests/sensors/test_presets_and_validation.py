@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import pytest
 
-from alignment_core import scenario
-from alignment_core.config import ConfigError
-from alignment_core.imu_errors import ImuConfig
-from alignment_core.master_ins import MasterConfig
-from alignment_core.sensor_presets import IMU_PRESETS, MASTER_PRESETS
+from alignment_core.config import scenario
+from alignment_core.sensors.imu import ImuConfig
+from alignment_core.sensors.master_ins import MasterConfig
+from alignment_core.sensors.presets import IMU_PRESETS, MASTER_PRESETS
+from alignment_core.validation import ConfigError
 
 
 def load(**sets):

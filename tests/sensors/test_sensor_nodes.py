@@ -13,11 +13,12 @@ from conftest import spin_until
 from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import DEG
-from alignment_core.doppler_radar import DopplerStage
-from alignment_core.ldv import LdvStage
-from alignment_core.master_ins import MasterInsStage
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.sensors.doppler_radar import DopplerStage
+from alignment_core.sensors.ldv import LdvStage
+from alignment_core.sensors.master_ins import MasterInsStage
+from alignment_core.units import DEG
 from alignment_ros import convert, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]

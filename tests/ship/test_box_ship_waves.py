@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from alignment_core import box_ship_waves
-from alignment_core.box_ship_waves import BoxShipWaves
-from alignment_core.mmg import CARRIER, MmgModel, rk4_step
+from alignment_core.ship.manoeuvring import box_ship_waves
+from alignment_core.ship.manoeuvring.box_ship_waves import BoxShipWaves
+from alignment_core.ship.manoeuvring.mmg import CARRIER, MmgModel, rk4_step
 
 RHO, G = 1025.0, box_ship_waves.G
 L, B, D = 310.0, 40.5, 11.3

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy.optimize import fsolve
 
-from alignment_core.autopilot import Autopilot, CourseSchedule, SteeringGear, ZigZag
-from alignment_core.course_keeping import ManoeuvringTrack
-from alignment_core.mmg import CARRIER, KVLCC2, KVLCC2_MODEL, MmgModel, rk4_step
+from alignment_core.ship.manoeuvring.autopilot import Autopilot, CourseSchedule, SteeringGear, ZigZag
+from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack
+from alignment_core.ship.manoeuvring.mmg import CARRIER, KVLCC2, KVLCC2_MODEL, MmgModel, rk4_step
 
 U0_MODEL = 1.179          # Y&Y: approach speed of the 7 m KVLCC2 model (Fn 0.142), m/s
 
@@ -160,7 +160,7 @@ def test_autopilot_holds_and_changes_course():
     """The carrier holds its course in a beam wind (heading within 0.01 deg after 20 min,
     the integral trims the wind's yaw moment) and turns 90 deg on order, settling within
     0.5 deg of the new course 10 min after the order."""
-    from alignment_core.mmg import Wind
+    from alignment_core.ship.manoeuvring.mmg import Wind
     model = MmgModel(CARRIER, Wind(20.0, math.radians(120.0)))
     rmax = math.radians(35.0)
     ap = Autopilot(2.0, 0.01, 60.0, rmax)

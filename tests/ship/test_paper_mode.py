@@ -3,9 +3,10 @@ linear-in-Hs extensions elsewhere, and the generated motion reaching those ampli
 import numpy as np
 import pytest
 
-from alignment_core.attitude import DEG
-from alignment_core.config import build
-from alignment_core.ship import PaperShipMotion, ShipConfig
+from alignment_core.ship.config import ShipConfig
+from alignment_core.ship.paper import PaperShipMotion
+from alignment_core.units import DEG
+from alignment_core.validation import build
 
 TABLE3 = {3: (1.25, 1.01, 1.03), 4: (2.71, 1.71, 1.92), 5: (5.62, 2.91, 3.36), 6: (7.47, 3.15, 4.15),
           7: (9.84, 5.27, 6.11)}          # seed 002 Table 3, degrees, roll/pitch/yaw

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from alignment_core.mmg import SHIPS, MmgModel, rk4_step
+from alignment_core.ship.manoeuvring.mmg import SHIPS, MmgModel, rk4_step
 
 
 @pytest.mark.parametrize('name', sorted(SHIPS))

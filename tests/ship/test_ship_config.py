@@ -5,11 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from alignment_core import earth, pipeline, scenario
-from alignment_core.attitude import DEG
-from alignment_core.config import ConfigError
-from alignment_core.ship import PaperShipMotion, make_motion
-from alignment_core.ship_waves import SpectralShipMotion, StraightCourse
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.geometry import earth
+from alignment_core.ship.motion import make_motion
+from alignment_core.ship.paper import PaperShipMotion
+from alignment_core.ship.spectral import SpectralShipMotion, StraightCourse
+from alignment_core.units import DEG
+from alignment_core.validation import ConfigError
 
 
 @pytest.mark.parametrize('overrides,message', [

@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from alignment_core import consistency, pipeline, scenario
+from alignment_core import evaluation as consistency
+from alignment_core import pipeline
+from alignment_core.config import scenario
 from alignment_core.samples import ShipBatch
 
 NOISE_OFF = {'imu.gyro_bias_dph': 0.0, 'imu.accel_bias_ug': 0.0, 'imu.arw_dpsh': 0.0,

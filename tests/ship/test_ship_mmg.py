@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from test_ship_ins import NOISE_OFF, strapdown_errors
 
-from alignment_core import pipeline, scenario
-from alignment_core.config import ConfigError
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.validation import ConfigError
 
 ROOT = Path(__file__).resolve().parents[2]
 ATT_TOL = 1e-6            # rad
@@ -76,7 +77,7 @@ def test_wind_heels_the_ship_by_the_heeling_arm():
     stability books). Y_W with the relative wind of the ship's speed (its small sway drift
     neglected: 5 %). The autopilot holds the course (within 0.2 deg: the 600 s warm-up
     before t = 0 trims most of the wind's yaw moment)."""
-    from alignment_core.mmg import CARRIER, RHO_AIR
+    from alignment_core.ship.manoeuvring.mmg import CARRIER, RHO_AIR
     ov = {'ship.mode': 'spectral', 'ship.sea_state': 0, 'ship.course_keeping': 'mmg',
           'ship.heading_deg': 0.0, 'ship.wind_speed_kn': 40.0, 'ship.wind_from_deg': 90.0,
           'ship.speed_kn': 15.0}

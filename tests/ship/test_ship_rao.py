@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import scipy.io
 
-from alignment_core import rao, wave_spectrum
-from alignment_core.attitude import DEG
-from alignment_core.ship import ShipConfig
-from alignment_core.ship_waves import SpectralShipMotion
+from alignment_core.ship import rao, wave_spectrum
+from alignment_core.ship.config import ShipConfig
+from alignment_core.ship.spectral import SpectralShipMotion
+from alignment_core.units import DEG
 
 S175 = Path(__file__).resolve().parents[2] / 'data/ship/s175.mat'
 needs_s175 = pytest.mark.skipif(not S175.exists(), reason='data/ship/s175.mat missing from the checkout')

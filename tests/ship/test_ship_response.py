@@ -12,10 +12,12 @@ import numpy as np
 import pytest
 from scipy import signal, stats
 
-from alignment_core import pipeline, rao, scenario, wave_spectrum
-from alignment_core.attitude import DEG
-from alignment_core.ship import KNOT, ShipConfig
-from alignment_core.ship_waves import SpectralShipMotion
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.ship import rao, wave_spectrum
+from alignment_core.ship.config import ShipConfig
+from alignment_core.ship.spectral import SpectralShipMotion
+from alignment_core.units import DEG, KNOT
 
 FS = 2.0
 T4H = np.arange(int(4 * 3600 * FS) + 1) / FS

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from scipy import integrate, signal
 
-from alignment_core import sea_state, wave_spectrum
-from alignment_core.config import ConfigError
-from alignment_core.ship import ShipConfig
-from alignment_core.ship_waves import SpectralShipMotion
+from alignment_core.ship import sea_state, wave_spectrum
+from alignment_core.ship.config import ShipConfig
+from alignment_core.ship.spectral import SpectralShipMotion
+from alignment_core.validation import ConfigError
 
 FS = 2.0                                   # Hz, plenty for waves (periods > 2.5 s)
 T_LONG = np.arange(int(3 * 3600 * FS) + 1) / FS

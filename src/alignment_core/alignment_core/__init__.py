@@ -1,1 +1,3 @@
 """Pure-Python physics and estimation library for shipboard transfer alignment (no ROS imports)."""
+
+

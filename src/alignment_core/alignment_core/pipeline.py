@@ -7,14 +7,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import earth
-from .aircraft import AircraftKinematics
-from .attitude import DEG
-from .samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipBatch, ShipSample
-from .scenario import Scenario, tau_of
-from .sensors import DopplerSample, DopplerStage, ImuErrorModel, LdvStage, MasterInsStage
-from .ship import PaperShipMotion, make_motion
-from .transfer_alignment import Estimate, TransferAlignment
+from alignment_core.aircraft.kinematics import AircraftKinematics
+from alignment_core.config.scenario import Scenario, tau_of
+from alignment_core.estimation.engine import TransferAlignment
+from alignment_core.estimation.outputs import Estimate
+from alignment_core.geometry import earth
+from alignment_core.samples import (
+    AircraftTruth,
+    DopplerSample,
+    ImuSample,
+    LdvSample,
+    MasterSample,
+    ShipBatch,
+    ShipSample,
+)
+from alignment_core.sensors.doppler_radar import DopplerStage
+from alignment_core.sensors.imu import ImuErrorModel
+from alignment_core.sensors.ldv import LdvStage
+from alignment_core.sensors.master_ins import MasterInsStage
+from alignment_core.ship.motion import make_motion
+from alignment_core.ship.paper import PaperShipMotion
+from alignment_core.units import DEG
 
 
 def plane_of(sc: Scenario) -> earth.TangentPlane:

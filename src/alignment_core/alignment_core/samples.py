@@ -99,3 +99,14 @@ class ShipBatch:
 
     def slice(self, sl: slice) -> ShipBatch:
         return ShipBatch(*(getattr(self, f)[sl] for f in ShipBatch.__slots__))
+
+
+
+@dataclass(frozen=True, slots=True)
+class DopplerSample:
+    """Doppler radar reading (/doppler/twist): ground velocity in aircraft body axes (FLU,
+    m/s) and its 1-sigma per axis; `valid` False means no measurement (covariance[0] = -1)."""
+    t_ns: int
+    v_b: np.ndarray
+    sigma: float
+    valid: bool

@@ -22,8 +22,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from alignment_core import pipeline, scenario
-from alignment_core.attitude import ARCMIN
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.units import ARCMIN
 
 from .statistics import nees, settling_time
 

@@ -15,7 +15,7 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
 from alignment_core import pipeline
-from alignment_core.transfer_alignment import TransferAlignment
+from alignment_core.estimation.engine import TransferAlignment
 from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import ScenarioParameters
 

@@ -16,9 +16,8 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu, NavSatFix, NavSatStatus
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
-from alignment_core.doppler_radar import DopplerSample
-from alignment_core.samples import AircraftTruth, ImuSample, LdvSample, MasterSample, ShipSample
-from alignment_core.transfer_alignment import Estimate
+from alignment_core.estimation.outputs import Estimate
+from alignment_core.samples import AircraftTruth, DopplerSample, ImuSample, LdvSample, MasterSample, ShipSample
 
 from . import topics
 

@@ -23,8 +23,8 @@ from pathlib import Path
 
 import yaml
 
-from alignment_core import scenario as core_scenario
-from alignment_core.config import ConfigError
+from alignment_core.config import scenario as core_scenario
+from alignment_core.validation import ConfigError
 
 from . import domain, summary, topics
 from .params import flat_scenario

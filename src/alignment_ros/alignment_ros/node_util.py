@@ -16,7 +16,7 @@ from rclpy.clock import Clock, ClockType
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 
-from alignment_core.config import ConfigError
+from alignment_core.validation import ConfigError
 
 from . import qos
 

@@ -14,8 +14,8 @@ import typing
 
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
 
-from alignment_core import config as core_config
-from alignment_core import scenario as core_scenario
+from alignment_core import validation as core_config
+from alignment_core.config import scenario as core_scenario
 
 
 def _flatten(cls, prefix: str = '') -> list[tuple[str, typing.Any, typing.Any]]:

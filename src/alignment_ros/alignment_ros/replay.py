@@ -16,7 +16,7 @@ from pathlib import Path
 import rclpy
 import yaml
 
-from alignment_core.models import DOPPLER_MODELS
+from alignment_core.estimation.models import DOPPLER_MODELS
 
 from . import summary, topics
 from .bag import BagError, BagReader

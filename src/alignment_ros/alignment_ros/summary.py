@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 from rclpy.serialization import deserialize_message
 
-from alignment_core.attitude import ARCMIN
+from alignment_core.units import ARCMIN
 
 from . import topics
 from .bag import read_bag, topic_counts

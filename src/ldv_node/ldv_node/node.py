@@ -8,8 +8,8 @@ from geometry_msgs.msg import TwistWithCovarianceStamped
 from nav_msgs.msg import Odometry
 
 from alignment_core import pipeline
-from alignment_core.doppler_radar import DopplerStage
-from alignment_core.ldv import LdvStage
+from alignment_core.sensors.doppler_radar import DopplerStage
+from alignment_core.sensors.ldv import LdvStage
 from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import ScenarioParameters
 from alignment_ros.stamped_pairs import StampPairer

@@ -9,8 +9,8 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import NavSatFix
 
 from alignment_core import pipeline
-from alignment_core.attitude import DEG
-from alignment_core.master_ins import MasterInsStage
+from alignment_core.sensors.master_ins import MasterInsStage
+from alignment_core.units import DEG
 from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import ScenarioParameters
 

@@ -11,7 +11,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import NavSatFix
 
 from alignment_core import pipeline
-from alignment_core.config import ConfigError
+from alignment_core.validation import ConfigError
 from alignment_ros import convert, node_util, topics
 from alignment_ros.params import ScenarioParameters
 

@@ -1,0 +1,3 @@
+"""The aircraft (truth): deck spot and kinematics, flexure, catapult, vibration, flight."""
+
+

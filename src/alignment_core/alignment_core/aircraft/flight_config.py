@@ -1,0 +1,121 @@
+"""Flight segments after the release (`aircraft.flight.*`): syntax, parsing and checks."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from alignment_core.validation import ConfigError, require
+
+SEGMENT_KINDS = ('level', 'climb', 'turn')
+VERTICAL_KEYS = ('climb_rate_mps', 'flight_path_deg', 'pitch_deg')
+TURN_KEYS = ('bank_deg', 'turn_rate_dps')
+COMMON_KEYS = ('duration_s', 'speed_mps', 'transition_s')
+ALLOWED_KEYS = {'level': COMMON_KEYS, 'climb': COMMON_KEYS + VERTICAL_KEYS,
+                'turn': COMMON_KEYS + TURN_KEYS + VERTICAL_KEYS}
+
+
+@dataclass(frozen=True)
+class FlightSegment:
+    """One parsed flight segment; None = not given (see the module docstring)."""
+    kind: str
+    duration_s: float = 0.0
+    speed_mps: float | None = None
+    transition_s: float | None = None
+    climb_rate_mps: float | None = None
+    flight_path_deg: float | None = None
+    pitch_deg: float | None = None
+    bank_deg: float | None = None
+    turn_rate_dps: float | None = None
+
+    def given(self, keys: tuple[str, ...]) -> list[str]:
+        return [k for k in keys if getattr(self, k) is not None]
+
+
+def parse_segments(text: str) -> tuple[FlightSegment, ...]:
+    """Parse and check a segment string; ConfigError names the segment and the problem."""
+    items = [p.strip() for p in text.replace('\n', ';').split(';')]
+    items = [p for p in items if p]
+    out = []
+    for i, item in enumerate(items):
+        where = f"segments[{i}] ({item!r})"
+        kind, *pairs = item.split()
+        require(kind in SEGMENT_KINDS,
+                f"{where}: unknown segment type {kind!r} (allowed: {', '.join(SEGMENT_KINDS)})")
+        vals: dict[str, float] = {}
+        for p in pairs:
+            key, sep, val = p.partition('=')
+            require(bool(sep) and bool(key) and bool(val), f"{where}: expected key=value, got {p!r}")
+            require(key in ALLOWED_KEYS[kind],
+                    f"{where}: unknown key {key!r} for {kind} (allowed: {', '.join(ALLOWED_KEYS[kind])})")
+            require(key not in vals, f"{where}: {key} given twice")
+            try:
+                v = float(val)
+            except ValueError:
+                raise ConfigError(f"{where}: {key} must be a number, got {val!r}") from None
+            require(math.isfinite(v), f"{where}: {key} must be finite, got {val!r}")
+            vals[key] = v
+        seg = FlightSegment(kind=kind, **vals)
+        _check_segment(seg, where, last=(i == len(items) - 1))
+        out.append(seg)
+    return tuple(out)
+
+
+def _check_segment(seg: FlightSegment, where: str, last: bool) -> None:
+    require(seg.duration_s >= 0.0, f"{where}: duration_s must be >= 0, got {seg.duration_s}")
+    require(seg.duration_s > 0.0 or last,
+            f"{where}: duration_s must be > 0 (only the last segment may be open-ended, duration 0)")
+    require(seg.duration_s <= 86400.0, f"{where}: duration_s must be <= 86400, got {seg.duration_s}")
+    if seg.speed_mps is not None:
+        require(1.0 <= seg.speed_mps <= 1000.0, f"{where}: speed_mps must be in [1, 1000], got {seg.speed_mps}")
+    if seg.climb_rate_mps is not None and seg.speed_mps is not None:
+        require(abs(seg.climb_rate_mps) < seg.speed_mps,
+                f"{where}: |climb_rate_mps| must be below speed_mps, got {seg.climb_rate_mps} at {seg.speed_mps}")
+    if seg.transition_s is not None:
+        require(seg.transition_s > 0.0, f"{where}: transition_s must be > 0, got {seg.transition_s}")
+    vert = seg.given(VERTICAL_KEYS)
+    if seg.kind == 'climb':
+        require(len(vert) == 1, f"{where}: a climb needs exactly one of {', '.join(VERTICAL_KEYS)}"
+                                f"{' (got ' + ', '.join(vert) + ')' if vert else ''}")
+    else:
+        require(len(vert) <= 1, f"{where}: give at most one of {', '.join(VERTICAL_KEYS)}")
+    for k in ('flight_path_deg', 'pitch_deg'):
+        v = getattr(seg, k)
+        require(v is None or abs(v) < 90.0, f"{where}: {k} must be within (-90, 90), got {v}")
+    if seg.kind == 'turn':
+        turn = seg.given(TURN_KEYS)
+        require(len(turn) == 1, f"{where}: a turn needs exactly one of bank_deg, turn_rate_dps"
+                                f"{' (got both)' if len(turn) == 2 else ''}")
+        require(seg.bank_deg is None or abs(seg.bank_deg) < 90.0,
+                f"{where}: bank_deg must be within (-90, 90), got {seg.bank_deg}")
+        require(seg.turn_rate_dps is None or abs(seg.turn_rate_dps) <= 90.0,
+                f"{where}: turn_rate_dps must be within [-90, 90], got {seg.turn_rate_dps}")
+
+
+@dataclass(frozen=True)
+class FlightConfig:
+    """Flight after the catapult release. `segments` '' keeps the original free flight (the
+    release velocity and attitude held constant); otherwise a segment list (flight_profile.py).
+    `transition_s`: default blend time of each segment's changes (roll-in/out, speed, climb);
+    `settle_s`: time to rotate from the deck attitude into the flight attitude after the
+    release; `alpha_deg`: angle of attack (body x above the velocity vector)."""
+    segments: str = ''
+    transition_s: float = 3.0
+    settle_s: float = 2.0
+    alpha_deg: float = 0.0
+
+    def validate(self) -> None:
+        require(0.0 < self.transition_s <= 60.0, f"transition_s must be in (0, 60], got {self.transition_s}")
+        require(0.0 < self.settle_s <= 60.0, f"settle_s must be in (0, 60], got {self.settle_s}")
+        require(-20.0 <= self.alpha_deg <= 30.0, f"alpha_deg must be in [-20, 30], got {self.alpha_deg}")
+        segs = parse_segments(self.segments)
+        for i, s in enumerate(segs):
+            where = f"segments[{i}] ({s.kind})"
+            t = s.transition_s if s.transition_s is not None else self.transition_s
+            require(s.duration_s == 0.0 or t <= s.duration_s + 1e-9,
+                    f"{where}: the transition ({t} s) must fit in the segment's duration_s ({s.duration_s} s)")
+            if s.pitch_deg is not None:
+                require(abs(s.pitch_deg - self.alpha_deg) < 90.0,
+                        f"{where}: pitch_deg - alpha_deg must be within (-90, 90)")
+
+    def parsed(self) -> tuple[FlightSegment, ...]:
+        return parse_segments(self.segments)

@@ -1,0 +1,3 @@
+"""Scenario assembly: loading, overrides and validation of a complete run."""
+
+

@@ -1,0 +1,151 @@
+"""The alignment filter's configuration (`filter.*`) and its validation."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from alignment_core.estimation.models import (
+    DOPPLER_MODELS,
+    NONLINEAR_MODELS,
+)
+from alignment_core.validation import require
+
+LINEAR_ALGORITHMS = ('kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud', 'combined')
+
+
+NONLINEAR_ALGORITHMS = ('ekf', 'ukf', 'ckf')
+
+
+ATTITUDE_MODELS = ('seed003_21', 'seed003_24')           # attitude-match rows and mounting states
+
+
+RATE_MODELS = ('vm12', 'vm15', 'seed003_21', 'seed003_24')  # phi and eps states: rate matching
+
+
+@dataclass(frozen=True)
+class FilterConfig:
+    """Alignment filter tuning and geometry (all known to the user, none from truth)."""
+    model: Literal['vm15', 'vm12', 'seed000_6', 'seed000_large_angle', 'seed002_10', 'seed003_21',
+                   'seed003_24', 'seed001_13'] = 'vm15'
+    lever_arm_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
+    lever_arm_treatment: Literal['compensation', 'none', 'butterworth'] = 'compensation'
+    butterworth_cutoff_hz: float = 0.505      # seed 002: butter(2, 0.0101) at 100 Hz
+    lever_arm_states: bool = False
+    lever_arm_sigma_m: float = 1.0
+    init_attitude_sigma_deg: float = 1.0
+    init_yaw_sigma_deg: float = 0.0           # 0: init_attitude_sigma_deg
+    init_velocity_sigma_mps: float = 0.1
+    gyro_bias_sigma_dph: float = 0.01
+    accel_bias_sigma_ug: float = 100.0
+    arw_dpsh: float = 0.001
+    vrw_ugpshz: float = 10.0
+    gyro_bias_rw_dphps: float = 0.0
+    accel_bias_rw_ugps: float = 0.0
+    ldv_sigma_mps: float = 0.01
+    master_velocity_sigma_mps: float = 0.001
+    parked_velocity_sigma_mps: float = 0.005
+    launch_detect_mps: float = 0.05
+    launch_confirm_samples: int = 3           # LDV samples in a row above launch_detect_mps that make a launch
+    creep_detect_mps: float = 0.02            # slow deck motion: median LDV speed above this (0 = off)
+    creep_window_samples: int = 25            # ... over this many valid samples
+    algorithm: Literal['kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud',
+                       'combined', 'ekf', 'ukf', 'ckf'] = 'kf'
+    float32: bool = False
+    stf_rho: float = 0.95
+    stf_beta: float = 3.0      # at 100 Hz V0 (about 20 samples) scatters +-30 % around R: beta < ~2.5 fades on noise
+    stf_alpha: tuple[float, float, float, float, float] = (1.0, 1.0, 1.0, 1.0, 1.0)
+    fading_factor: float = 1.0
+    fading_gamma: float = 10.0
+    master_tilt_sigma_arcmin: float = 0.2
+    master_heading_sigma_arcmin: float = 0.5
+    mounting_sigma_deg: float = 1.0           # seed003: prior of the mounting misalignment
+    flexure_sigma_arcmin: tuple[float, float, float] = (3.0, 3.0, 3.0)   # seed003, per axis
+    flexure_tau_s: tuple[float, float, float] = (3.0, 3.0, 3.0)
+    attitude_match_sigma_arcmin: float = 0.1  # seed003: white noise of the attitude match
+    large_angle_feedback_deg: float = 1.0     # seed000_large_angle: feed phi back below this sigma
+    doppler_scale_sigma_ppm: float = 1000.0   # seed001_13: priors of the radar's errors
+    doppler_bias_sigma_mps: float = 0.05
+    doppler_drift_sigma_arcmin: float = 5.0
+    output_rate_hz: float = 10.0
+    gate_chi2: float = 0.0
+    max_gap_factor: float = 1.5
+    heading_on_deck_deg: float = 0.0          # nominal aircraft heading on deck (from the bow, clockwise)
+    master_latency_s: float = 0.0             # known latency: /master/odom data are valid at stamp - latency
+    ldv_latency_s: float = 0.0                # the same for /ldv/twist
+    doppler_latency_s: float = 0.0            # the same for /doppler/twist (seed001_13)
+    stf_lambda_max: float = 1e6               # cap on the strong tracking fading factor(s)
+    launch_accel_noise_mps2: float = 0.0      # velocity noise density (m/s^2/sqrt(Hz)) after the launch
+    launch_noise_s: float = 1.0               # ... for this long after the LDV detects it
+    attitude_match_axes: Literal['all', 'yaw'] = 'all'   # seed003_*: match all three axes or heading only
+    rate_matching: bool = False               # + angular-rate rows (models/rate_matching.py)
+    rate_match_sigma_dph: float = 1.0         # white noise of the rate match beyond the gyro's ARW
+    master_delay_state: bool = False          # + the master's unknown latency as a state (models/master_delay.py)
+    master_delay_sigma_ms: float = 20.0       # ... its prior 1-sigma
+
+    def validate(self) -> None:
+        for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
+                  'accel_bias_sigma_ug', 'ldv_sigma_mps', 'output_rate_hz', 'parked_velocity_sigma_mps',
+                  'launch_detect_mps'):
+            require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
+        for k in ('arw_dpsh', 'vrw_ugpshz', 'gyro_bias_rw_dphps', 'accel_bias_rw_ugps',
+                  'master_velocity_sigma_mps', 'gate_chi2'):
+            require(getattr(self, k) >= 0.0, f"{k} must be >= 0, got {getattr(self, k)}")
+        require(self.creep_detect_mps >= 0.0, f"creep_detect_mps must be >= 0 (0 = off), got {self.creep_detect_mps}")
+        require(3 <= self.creep_window_samples <= 10000,
+                f"creep_window_samples must be in [3, 10000], got {self.creep_window_samples}")
+        require(1 <= self.launch_confirm_samples <= 100,
+                f"launch_confirm_samples must be in [1, 100], got {self.launch_confirm_samples}")
+        require(self.max_gap_factor > 1.0, f"max_gap_factor must be > 1, got {self.max_gap_factor}")
+        require(-180.0 <= self.heading_on_deck_deg <= 180.0,
+                f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
+        for k in ('master_latency_s', 'ldv_latency_s', 'doppler_latency_s'):
+            require(0.0 <= getattr(self, k) <= 1.0, f"{k} must be in [0, 1] s, got {getattr(self, k)}")
+        require(self.stf_lambda_max >= 1.0, f"stf_lambda_max must be >= 1, got {self.stf_lambda_max}")
+        require(self.launch_accel_noise_mps2 >= 0.0,
+                f"launch_accel_noise_mps2 must be >= 0 (0 = off), got {self.launch_accel_noise_mps2}")
+        require(0.0 < self.launch_noise_s <= 600.0, f"launch_noise_s must be in (0, 600], got {self.launch_noise_s}")
+        require(0.0 < self.stf_rho <= 1.0, f"stf_rho must be in (0, 1], got {self.stf_rho}")
+        require(self.stf_beta >= 1.0, f"stf_beta must be >= 1, got {self.stf_beta}")
+        require(all(a >= 1.0 for a in self.stf_alpha), f"stf_alpha must all be >= 1, got {self.stf_alpha}")
+        require(self.fading_factor >= 1.0, f"fading_factor must be >= 1, got {self.fading_factor}")
+        require(self.fading_gamma >= 1.0, f"fading_gamma must be >= 1, got {self.fading_gamma}")
+        for k in ('butterworth_cutoff_hz', 'lever_arm_sigma_m', 'mounting_sigma_deg', 'attitude_match_sigma_arcmin',
+                  'large_angle_feedback_deg', 'doppler_scale_sigma_ppm', 'doppler_bias_sigma_mps',
+                  'doppler_drift_sigma_arcmin', 'rate_match_sigma_dph', 'master_delay_sigma_ms'):
+            require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
+        require(self.init_yaw_sigma_deg >= 0.0, f"init_yaw_sigma_deg must be >= 0, got {self.init_yaw_sigma_deg}")
+        require(all(v > 0.0 for v in self.flexure_sigma_arcmin + self.flexure_tau_s),
+                f"flexure_sigma_arcmin and flexure_tau_s must be > 0, got {self.flexure_sigma_arcmin}, "
+                f"{self.flexure_tau_s}")
+        self.validate_combination()
+
+    def validate_combination(self) -> None:
+        """Model x algorithm x options (the matrix in the module docstring)."""
+        m, a = self.model, self.algorithm
+        require(not (m in DOPPLER_MODELS and a in ('stf', 'stf_multiple')),
+                f"algorithm {a} cannot run {m}: its innovation recursion would mix the LDV and Doppler "
+                f"streams; use kf, fading, fading_tested, carlson, ud, combined, ekf, ukf or ckf")
+        require(not (self.lever_arm_states and m in DOPPLER_MODELS),
+                f"lever_arm_states is not available with {m} (its Doppler rows have no lever arm)")
+        if m in NONLINEAR_MODELS:
+            require(a in NONLINEAR_ALGORITHMS,
+                    f"model {m} is nonlinear: algorithm must be one of {', '.join(NONLINEAR_ALGORITHMS)}, got {a}")
+            require(not self.lever_arm_states, f"lever_arm_states is not available with the nonlinear model {m}")
+        require(not (self.float32 and a in NONLINEAR_ALGORITHMS),
+                f"algorithm {a} runs in float64 only: set float32 false or pick one of {', '.join(LINEAR_ALGORITHMS)}")
+        require(self.attitude_match_axes in ('all', 'yaw'),
+                f"attitude_match_axes must be 'all' or 'yaw', got {self.attitude_match_axes!r}")
+        require(self.attitude_match_axes == 'all' or m in ATTITUDE_MODELS,
+                f"attitude_match_axes yaw needs a model with mounting states and attitude rows "
+                f"({', '.join(ATTITUDE_MODELS)}): a heading match without them would pull the slave onto the "
+                f"master's heading, off by the unknown mounting yaw; got model {m}")
+        require(not self.rate_matching or m in RATE_MODELS,
+                f"rate_matching needs attitude and gyro-bias states (models {', '.join(RATE_MODELS)}), got {m}")
+        require(not (self.rate_matching and a in ('stf', 'stf_multiple')),
+                f"algorithm {a} cannot take rate_matching: its innovation recursion needs the same rows at "
+                f"every update, and the rate rows start at the second master sample")
+        require(not self.master_delay_state or (m not in NONLINEAR_MODELS and m not in DOPPLER_MODELS),
+                f"master_delay_state needs a linear model without the Doppler stream, got {m}")
+        require(not (self.lever_arm_states and self.lever_arm_treatment != 'compensation'),
+                f"lever_arm_states estimate the error of the compensated lever arm: they need "
+                f"lever_arm_treatment compensation, got {self.lever_arm_treatment}")

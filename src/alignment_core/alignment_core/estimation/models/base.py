@@ -1,0 +1,283 @@
+"""The interface every error-state model offers the transfer-alignment engine.
+
+The engine (transfer_alignment.py) owns the slave strapdown, the sensor-bias estimates, the
+lever arm and the matching reference; a model owns the error state: its labels, how it
+propagates, what it measures and how an estimate is fed back. Per IMU interval the engine
+calls `transition(p)` / `process_noise(h)` (or, for a nonlinear model, `propagator(p)`); per
+matching instant `measurement(m, corr)`, then `feedback(x, p, m, nav, corr)` and `misalignment(...)`.
+
+Conventions shared by all models (nav frame ENU, bodies FLU):
+    attitude error   C_est = exp(-[phi x]) C_true ~ (I - [phi x]) C_true
+    velocity error   dV = V_est - V_true
+    sensor biases    residual after the engine's compensation (body axes), random constants
+    lever arm error  dr = r_true - r_used (ship axes)
+
+Discretisation (unless a model says otherwise): for the continuous error dynamics
+x' = F x + G w (w white, density Qc) over an IMU interval h with F frozen at the interval's
+start attitude, mid-interval rates and mean specific force,
+    Phi = I + F h + (F h)^2 / 2          (second order; the interval is 10 ms, |F h| < 1e-3)
+    Qd  = G Qc G^T h                     (first order; the sensor noises are isotropic per
+                                          triad, so C Qc C^T = Qc and Qd needs no attitude)
+Markov states (deck flexure) are discretised exactly (Van Loan); random constants have
+Phi = I and no process noise.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from alignment_core.geometry.rotations import dcm_to_rotvec_small
+from alignment_core.navigation.strapdown import NavState
+
+# state kinds, for per-block tuning (the multiple-factor STF's alpha per kind)
+PHI, DV, EPS, NABLA, OTHER = 0, 1, 2, 3, 4
+KIND_NAMES = ('phi', 'dV', 'eps', 'nabla', 'other')
+
+
+@dataclass(slots=True)
+class Propagation:
+    """One strapdown interval as the error model sees it (nav frame ENU, SI)."""
+    c_nb: np.ndarray        # slave attitude at the interval start (nav <- body)
+    f_n: np.ndarray         # mean specific force over the interval
+    w_ie: np.ndarray        # Earth rate at mid-interval
+    w_en: np.ndarray        # transport rate at mid-interval
+    v_n: np.ndarray         # slave velocity at the interval end
+    lat: float              # rad
+    height: float           # m
+    h: float                # interval, s
+
+
+class RateInputs(NamedTuple):
+    """The slave's and the master's angular rates over the IMU interval [t_v - h, t_v] that ends
+    at a match (rate matching, models/rate_matching.py)."""
+    w_b: np.ndarray          # (3,) slave gyro mean rate, bias-compensated (aircraft axes), rad/s
+    dtheta: np.ndarray       # (3,) the interval's angle increment, w_b h
+    omega_n: np.ndarray      # (3,) inertial rate of the ship (= aircraft) in nav axes, interval mean
+    w_n: np.ndarray          # (3,) its master-attitude-dependent part C_m w_m (interval mean)
+    w_dot_n: np.ndarray      # (3,) d/dt (C_m w_m): the master rate's change (delay state)
+    h: float                 # interval, s
+
+
+@dataclass(slots=True)
+class Match:
+    """One matching instant: the master-derived reference for the slave and what it took.
+
+    z_vel is the velocity difference v_slave - v_ref after the lever-arm treatment (the
+    Butterworth output under `lever_arm_treatment: butterworth`); r_vel its noise covariance.
+    Everything is at the master sample's time of validity (the slave solution `ins` too).
+    c_nom: the aircraft's nominal mounting on the deck, C_a^s = Rz(-heading on deck); the
+    misalignment is reported relative to C_m c_nom (`nominal_attitude`)."""
+    c_m: np.ndarray         # master attitude as reported (nav <- ship body)
+    w_m: np.ndarray         # master body rate w.r.t. nav (ship axes)
+    r: np.ndarray           # lever arm used in the reference (ship axes)
+    u_n: np.ndarray         # C_m (w_m x r + v_LDV): lever-arm plus deck velocity, nav frame
+    v_ref: np.ndarray       # master velocity + u_n
+    z_vel: np.ndarray       # (3,) velocity difference used as measurement
+    r_vel: np.ndarray       # (3, 3) its white-noise covariance
+    ins: NavState           # the slave solution at this instant (its time of validity)
+    c_nom: np.ndarray | None = None   # nominal aircraft axes in ship axes (heading on deck); None = I
+    w_n: np.ndarray | None = None     # master body rate w.r.t. nav in nav axes, C_m w_m (delay state)
+    a_n: np.ndarray | None = None     # acceleration of the ship's deck spot, nav frame (delay state); None: unknown
+    rate: RateInputs | None = None    # angular rates over the IMU interval ending here (rate matching)
+
+
+@dataclass
+class Corrections:
+    """What feedback accumulates outside the strapdown: sensor-bias estimates (body axes),
+    the lever-arm correction (ship axes) and the mounting estimate (aircraft axes)."""
+    bg: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    ba: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    dr: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    mu: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+class Measurement(NamedTuple):
+    """z = H x + v, v ~ N(0, R) (H None and hfun given for a nonlinear measurement)."""
+    z: np.ndarray
+    h: np.ndarray | None
+    r: np.ndarray
+    hfun: Callable[[np.ndarray], np.ndarray] | None = None
+
+
+class ErrorModel:
+    """Base class: subclasses set the class attributes and implement the methods.
+
+    labels        state names (published in /alignment/state's layout)
+    kinds         per state, one of PHI, DV, EPS, NABLA, OTHER (tuning by block)
+    attitude      slice of phi in the state
+    velocity_rows nav axes (0 E, 1 N, 2 U) of the measurement's velocity rows, in row order
+    attitude_rows nav axes of the attitude-match rows that follow them (seed003: all three)
+    nonlinear     True: the engine calls propagator() and needs a nonlinear filter
+    uses_doppler  True: the engine also matches the Doppler radar (doppler_measurement())
+    """
+    name: str = ''
+    labels: tuple[str, ...] = ()
+    kinds: tuple[int, ...] = ()
+    attitude: slice = slice(0, 3)
+    velocity_rows: tuple[int, ...] = (0, 1, 2)
+    nonlinear: bool = False
+    uses_doppler: bool = False
+    attitude_rows: tuple[int, ...] = ()
+
+    @property
+    def n(self) -> int:
+        return len(self.labels)
+
+    def initial_covariance(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def continuous(self, p: Propagation) -> np.ndarray:
+        """F (n, n) of the continuous error dynamics (for tests and documentation)."""
+        raise NotImplementedError
+
+    def transition(self, p: Propagation) -> np.ndarray:
+        """Phi (n, n) over p.h."""
+        fh = self.continuous(p) * p.h
+        return np.eye(self.n) + fh + 0.5 * (fh @ fh)
+
+    def process_noise(self, h: float) -> np.ndarray:
+        """Qd (n, n) over an interval h."""
+        raise NotImplementedError
+
+    def propagator(self, p: Propagation) -> tuple[Callable, Callable | None]:
+        """(fun, jac) with x_(k+1) = fun(x_k) (nonlinear models only)."""
+        raise NotImplementedError
+
+    def measurement(self, m: Match, corr: Corrections) -> Measurement:
+        """z, H (or hfun), R at a matching instant (corr: the current corrections)."""
+        raise NotImplementedError
+
+    def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        """Apply the estimate x (covariance p) to the strapdown and the corrections; return the
+        residual state the filter keeps (zeros for what was fed back)."""
+        raise NotImplementedError
+
+    def misalignment(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState,
+                     corr: Corrections) -> tuple[np.ndarray, np.ndarray]:
+        """(mu, sigma): the aircraft IMU's estimated misalignment to the master (rotation
+        vector, aircraft axes, rad) and its 1-sigma, after feedback; x is the residual state
+        feedback() returned, p the covariance after the update."""
+        raise NotImplementedError
+
+
+def rotation_matrix(v: np.ndarray) -> np.ndarray:
+    """exp([v x]) by Rodrigues' formula, I + s [v x] + c (v v^T - |v|^2 I) (series near zero),
+    for one vector in scalar arithmetic (several times cheaper than the batch routine)."""
+    x, y, z = float(v[0]), float(v[1]), float(v[2])
+    a2 = x * x + y * y + z * z
+    if a2 < 1e-12:
+        s, c = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
+    else:
+        a = math.sqrt(a2)
+        s, c = math.sin(a) / a, (1.0 - math.cos(a)) / a2
+    d = 1.0 - c * a2
+    return np.array([[d + c * x * x, c * x * y - s * z, c * x * z + s * y],
+                     [c * x * y + s * z, d + c * y * y, c * y * z - s * x],
+                     [c * x * z - s * y, c * y * z + s * x, d + c * z * z]])
+
+
+def nominal_attitude(m: Match) -> np.ndarray:
+    """C_m c_nom: the aircraft attitude the master predicts with zero misalignment."""
+    return m.c_m if m.c_nom is None else m.c_m @ m.c_nom
+
+
+def skew_into(m: np.ndarray, r: int, c: int, v: np.ndarray) -> None:
+    """Write [v x] into the 3x3 block of m at (r, c)."""
+    x, y, z = v[0], v[1], v[2]
+    m[r, c + 1] = -z
+    m[r, c + 2] = y
+    m[r + 1, c] = z
+    m[r + 1, c + 2] = -x
+    m[r + 2, c] = -y
+    m[r + 2, c + 1] = x
+
+
+def relative_misalignment(c_m: np.ndarray, c_na: np.ndarray, p_rel: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """mu = log(C_m^T C_a) (aircraft axes) and its 1-sigma from the nav-frame covariance p_rel
+    of the relative attitude error, rotated to aircraft axes."""
+    return dcm_to_rotvec_small(c_m.T @ c_na), np.sqrt(np.diag(c_na.T @ p_rel @ c_na))
+
+
+class ModelWrapper(ErrorModel):
+    """A matching option around a model (models/__init__.py): every method delegates to `base`;
+    a subclass overrides what its option changes (rows, states, outputs)."""
+
+    def __init__(self, base: ErrorModel, suffix: str) -> None:
+        self.base = base
+        self.name = base.name + suffix
+        self.labels, self.kinds = base.labels, base.kinds
+        self.attitude, self.velocity_rows, self.attitude_rows = base.attitude, base.velocity_rows, base.attitude_rows
+
+    def initial_covariance(self) -> np.ndarray:
+        return self.base.initial_covariance()
+
+    def continuous(self, p: Propagation) -> np.ndarray:
+        return self.base.continuous(p)
+
+    def transition(self, p: Propagation) -> np.ndarray:
+        return self.base.transition(p)
+
+    def process_noise(self, h: float) -> np.ndarray:
+        return self.base.process_noise(h)
+
+    def measurement(self, m: Match, corr: Corrections) -> Measurement:
+        return self.base.measurement(m, corr)
+
+    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        return self.base.feedback(x, p, m, nav, corr)
+
+    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
+        return self.base.misalignment(x, p, m, nav, corr)
+
+
+class AugmentedModel(ModelWrapper):
+    """`base` + random-constant states appended (dx' = 0, no process noise, prior `sigma` each):
+    Phi, Qd and P0 grow by a block; the base keeps its own states. Subclasses add the
+    measurement columns and say what feedback does with the new states."""
+
+    def __init__(self, base: ErrorModel, suffix: str, labels: tuple[str, ...], sigma: float) -> None:
+        if base.nonlinear:
+            raise ValueError(f'{suffix.lstrip("+")} states need a linear base model, not {base.name}')
+        super().__init__(base, suffix)
+        self.labels = base.labels + labels
+        self.kinds = base.kinds + (OTHER,) * len(labels)
+        self.nb = base.n
+        self.sigma = float(sigma)
+        self._qd: dict[float, np.ndarray] = {}
+
+    def _grow(self, a: np.ndarray, corner: float) -> np.ndarray:
+        out = np.zeros((self.n, self.n))
+        out[:self.nb, :self.nb] = a
+        k = np.arange(self.nb, self.n)
+        out[k, k] = corner
+        return out
+
+    def initial_covariance(self) -> np.ndarray:
+        return self._grow(self.base.initial_covariance(), self.sigma ** 2)
+
+    def continuous(self, p: Propagation) -> np.ndarray:
+        return self._grow(self.base.continuous(p), 0.0)
+
+    def transition(self, p: Propagation) -> np.ndarray:
+        return self._grow(self.base.transition(p), 1.0)
+
+    def process_noise(self, h: float) -> np.ndarray:
+        qd = self._qd.get(h)
+        if qd is None:
+            qd = self._qd[h] = self._grow(self.base.process_noise(h), 0.0)
+        return qd
+
+    def base_measurement(self, m: Match, corr: Corrections) -> Measurement:
+        """The base's measurement with H widened by zero columns for the appended states."""
+        z, h, r, _ = self.base.measurement(m, corr)
+        hh = np.zeros((h.shape[0], self.n))
+        hh[:, :self.nb] = h
+        return Measurement(z, hh, r)
+
+    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
+        return self.base.misalignment(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

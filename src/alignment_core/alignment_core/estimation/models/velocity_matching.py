@@ -1,0 +1,248 @@
+"""Velocity-matching error model: phi (3), dV (3), gyro bias eps (3), accel bias (3) = 12
+states, optionally + the master INS attitude error phi_m (3) = 15 states.
+
+Nav frame ENU, attitude error C_est = (I - [phi x]) C_true, dV = V_est - V_true; biases are
+the residuals of the body-frame sensor biases after compensation (random constants with an
+optional random walk). Continuous model (Titterton & Weston 10; PSINS):
+  phi'  = -[w_in x] phi - C_b^n eps                     + w_g
+  dV'   = [f^n x] phi - [(2 w_ie + w_en) x] dV + C_b^n nabla + w_a
+Discretised over h as Phi = I + F h + (F h)^2 / 2 and Qd = G Qc G^T h.
+Measurement: z = V_slave - (V_master + C_m^n (w_m x r) + C_m^n v_LDV) = dV + v, H = [0 I 0 0].
+
+Master attitude states (random constants, phi_m' = 0): the master reports C_m,est =
+(I - [phi_m x]) C_m. Its nav velocity is exact by construction of the message (it is rotated
+back with its own attitude), but the lever-arm and LDV terms u = C_m,est (w_m x r + v_LDV)
+are rotated with the erroneous attitude, so z = dV - [u x] phi_m + v, H = [0 I 0 0 -[u x]].
+The aircraft-vs-master misalignment error is phi - phi_m: without these states the filter
+reports the slave's alignment to a master it believes perfect, and its sigma is too small
+whenever the master's own attitude error matters (a long deck alignment).
+
+`VelocityMatching` wraps these functions in the ErrorModel interface (models/base.py): model
+names `vm12` and `vm15` (the default). Its numbers are the engine's before the interface
+existed, operation for operation.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from alignment_core.estimation.models.base import (
+    DV,
+    EPS,
+    NABLA,
+    OTHER,
+    PHI,
+    Corrections,
+    ErrorModel,
+    Match,
+    Measurement,
+    Propagation,
+    nominal_attitude,
+    relative_misalignment,
+)
+from alignment_core.geometry.rotations import (
+    floats,
+    normalized_f,
+    quat_mul_f,
+    quat_to_dcm,
+    rotvec_to_dcm_small,
+    rotvec_to_quat_f,
+)
+from alignment_core.navigation.strapdown import NavState
+from alignment_core.units import ARCMIN, DEG, DPH, UG
+
+LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dV_U', 'eps_x', 'eps_y', 'eps_z',
+          'nabla_x', 'nabla_y', 'nabla_z')
+MASTER_LABELS = ('phim_E', 'phim_N', 'phim_U')
+N = 12
+H = np.hstack([np.zeros((3, 3)), np.eye(3), np.zeros((3, 6))])
+_dot = np.dot
+
+
+def labels(master_states: bool) -> tuple[str, ...]:
+    return LABELS + MASTER_LABELS if master_states else LABELS
+
+
+def measurement(u_n: np.ndarray, n: int = N) -> np.ndarray:
+    """H (3, n); for n = 15 the master-attitude block is -[u x] with u the rotated lever-arm
+    plus LDV velocity (nav frame)."""
+    if n == N:
+        return H
+    h = np.zeros((3, n))
+    h[0, 3] = h[1, 4] = h[2, 5] = 1.0
+    _skew_into(h, 0, 12, -u_n)
+    return h
+
+
+@dataclass(frozen=True)
+class NoiseDensities:
+    """Continuous white-noise densities: arw rad/sqrt(s), vrw m/s/sqrt(s), bias random walks."""
+    arw: float
+    vrw: float
+    gyro_bias_rw: float
+    accel_bias_rw: float
+
+
+_EYE = {12: np.eye(12), 15: np.eye(15)}
+
+
+def _skew_cells(r: int, c: int) -> list[tuple[int, int]]:
+    """The cells of [v x] at block (r, c), in the order of _skew_values."""
+    return [(r, c + 1), (r, c + 2), (r + 1, c), (r + 1, c + 2), (r + 2, c), (r + 2, c + 1)]
+
+
+def _skew_values(x: float, y: float, z: float) -> list[float]:
+    return [-z, y, z, -x, -y, x]
+
+
+def _fh_index(n: int) -> np.ndarray:
+    """Flat indices of F h's non-zero cells in an (n, n) array, in the order transition() lists
+    their values: [-w_in h x] at (0, 0), -C h at (0, 6), [f h x] at (3, 0),
+    [-(2 w_ie + w_en) h x] at (3, 3), C h at (3, 9)."""
+    cells = (_skew_cells(0, 0) + [(i, 6 + j) for i in range(3) for j in range(3)] + _skew_cells(3, 0)
+             + _skew_cells(3, 3) + [(3 + i, 9 + j) for i in range(3) for j in range(3)])
+    return np.array([r * n + c for r, c in cells])
+
+
+_FH_INDEX: dict[int, np.ndarray] = {}
+
+
+def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray,
+               h: float, n: int = N) -> np.ndarray:
+    """Phi (n, n) over an interval h, from the mean attitude, specific force and rates.
+
+    Speed: F h's 36 non-zero entries are computed in float arithmetic and written with one
+    put() (numpy slice writes of 3x3 blocks cost ~1 us each); the numbers are those of
+    `continuous(...) * h` written block by block."""
+    idx = _FH_INDEX.get(n)
+    if idx is None:
+        idx = _FH_INDEX[n] = _fh_index(n)
+    c = c_nb.ravel().tolist()
+    fx, fy, fz = f_n.tolist()
+    ie = w_ie.tolist()
+    en = w_en.tolist()
+    mh = -h
+    vals = (_skew_values(mh * (ie[0] + en[0]), mh * (ie[1] + en[1]), mh * (ie[2] + en[2]))
+            + [mh * e for e in c]
+            + _skew_values(h * fx, h * fy, h * fz)
+            + _skew_values(mh * (2.0 * ie[0] + en[0]), mh * (2.0 * ie[1] + en[1]), mh * (2.0 * ie[2] + en[2]))
+            + [h * e for e in c])
+    fh = np.zeros((n, n))
+    fh.put(idx, vals)
+    half = _dot(fh, fh)
+    half *= 0.5
+    phi = _EYE[n] + fh
+    phi += half
+    return phi
+
+
+def _skew_into(m: np.ndarray, r: int, c: int, v: np.ndarray) -> None:
+    """Write [v x] into the 3x3 block of m at (r, c) (faster than building it apart)."""
+    x, y, z = v[0], v[1], v[2]
+    m[r, c + 1] = -z
+    m[r, c + 2] = y
+    m[r + 1, c] = z
+    m[r + 1, c + 2] = -x
+    m[r + 2, c] = -y
+    m[r + 2, c + 1] = x
+
+
+def process_noise(q: NoiseDensities, h: float, n: int = N) -> np.ndarray:
+    """Qd (n, n) = G Qc G^T h. The sensor noises are white and isotropic per triad, so
+    C_b^n Qc C_b^nT = Qc and Qd does not depend on the attitude; phi_m has no process noise."""
+    return np.diag(np.repeat([q.arw**2 * h, q.vrw**2 * h, q.gyro_bias_rw**2 * h,
+                              q.accel_bias_rw**2 * h, 0.0][:n // 3], 3))
+
+
+def continuous(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray, n: int = N) -> np.ndarray:
+    """F (n, n) of the continuous model (transition() is I + F h + (F h)^2 / 2 of it)."""
+    f = np.zeros((n, n))
+    _skew_into(f, 0, 0, -(w_ie + w_en))
+    f[0:3, 6:9] = -c_nb
+    _skew_into(f, 3, 0, f_n)
+    _skew_into(f, 3, 3, -(2.0 * w_ie + w_en))
+    f[3:6, 9:12] = c_nb
+    return f
+
+
+def noise_densities(cfg) -> NoiseDensities:
+    """The continuous noise densities of a FilterConfig, in SI units."""
+    return NoiseDensities(arw=cfg.arw_dpsh * DEG / 60.0, vrw=cfg.vrw_ugpshz * UG,
+                          gyro_bias_rw=cfg.gyro_bias_rw_dphps * DPH, accel_bias_rw=cfg.accel_bias_rw_ugps * UG)
+
+
+def attitude_variances(cfg) -> np.ndarray:
+    """(3,) initial attitude variances: init_attitude_sigma_deg, yaw from init_yaw_sigma_deg if > 0."""
+    v = np.full(3, (cfg.init_attitude_sigma_deg * DEG) ** 2)
+    if cfg.init_yaw_sigma_deg > 0.0:
+        v[2] = (cfg.init_yaw_sigma_deg * DEG) ** 2
+    return v
+
+
+def master_variances(cfg) -> np.ndarray:
+    """(3,) prior variances of the master INS attitude error (tilt, tilt, heading)."""
+    return np.array([cfg.master_tilt_sigma_arcmin, cfg.master_tilt_sigma_arcmin,
+                     cfg.master_heading_sigma_arcmin]) ** 2 * ARCMIN**2
+
+
+class VelocityMatching(ErrorModel):
+    """vm12 / vm15: phi, dV, eps, nabla (+ phi_m), velocity matching (module docstring)."""
+    velocity_rows = (0, 1, 2)
+
+    def __init__(self, cfg, master_states: bool) -> None:
+        self.cfg = cfg
+        self.name = 'vm15' if master_states else 'vm12'
+        self.labels = labels(master_states)
+        self.kinds = (PHI,) * 3 + (DV,) * 3 + (EPS,) * 3 + (NABLA,) * 3 + (OTHER,) * 3 * master_states
+        self._n = len(self.labels)
+        self.noise = noise_densities(cfg)
+        self._qd: dict[float, np.ndarray] = {}
+
+    def initial_covariance(self) -> np.ndarray:
+        cfg = self.cfg
+        return np.diag(np.concatenate([
+            attitude_variances(cfg),
+            np.full(3, cfg.init_velocity_sigma_mps ** 2),
+            np.full(3, (cfg.gyro_bias_sigma_dph * DPH) ** 2),
+            np.full(3, (cfg.accel_bias_sigma_ug * UG) ** 2),
+            master_variances(cfg)][:self._n // 3]))
+
+    def continuous(self, p: Propagation) -> np.ndarray:
+        return continuous(p.c_nb, p.f_n, p.w_ie, p.w_en, self._n)
+
+    def transition(self, p: Propagation) -> np.ndarray:
+        return transition(p.c_nb, p.f_n, p.w_ie, p.w_en, p.h, self._n)
+
+    def process_noise(self, h: float) -> np.ndarray:
+        qd = self._qd.get(h)
+        if qd is None:
+            qd = self._qd[h] = process_noise(self.noise, h, self._n)
+        return qd
+
+    def measurement(self, m: Match, corr: Corrections) -> Measurement:
+        return Measurement(m.z_vel, measurement(m.u_n, self._n), m.r_vel)
+
+    def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        """C <- (I + [phi x]) C (exactly: exp([phi x]) C), V <- V - dV, biases accumulate;
+        the master's attitude error is not fed back (it is the master's)."""
+        phx, phy, phz = x[0:3].tolist()
+        nav.q_nb = np.array(normalized_f(quat_mul_f(rotvec_to_quat_f(phx, phy, phz), floats(nav.q_nb))))
+        nav.v_n = nav.v_n - x[3:6]
+        corr.bg = corr.bg + x[6:9]
+        corr.ba = corr.ba + x[9:12]
+        x_new = np.zeros(self._n)
+        x_new[12:] = x[12:]
+        return x_new
+
+    def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
+        """log((C_m c_nom)^T C_a) with, for vm15, C_m corrected by phi_m (C_m = (I + [phi_m x]) C_m,est)
+        and the sigma of phi - phi_m."""
+        c_na = quat_to_dcm(nav.q_nb)
+        c_m = nominal_attitude(m)
+        if self._n == 15:
+            c_m = rotvec_to_dcm_small(x[12:15]) @ c_m
+            p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
+        else:
+            p_rel = p[0:3, 0:3]
+        return relative_misalignment(c_m, c_na, p_rel)

@@ -1,0 +1,3 @@
+"""Navigation: strapdown mechanisation, the solution history by time of validity, stamp ordering."""
+
+

@@ -1,0 +1,224 @@
+"""Time-of-validity bookkeeping for the alignment filter: a short history of the slave solution
+and of the LDV stream, so that master data valid at t_v = stamp - latency are compared with the
+slave solution and the deck velocity at that same t_v (sensor_timing.py stamps data valid at t
+as t + latency).
+
+Slave history: the strapdown solution at each IMU step before the latest one (the latest is the
+engine's live state), each with the error-state transition Phi of the step that starts there.
+Between two steps the solution is interpolated (attitude along the geodesic, velocity and
+position linearly). Closed-loop feedback corrects the live state; `correct` applies the same
+correction (a nav-frame rotation, a velocity and a position change) to the stored solutions,
+so a later match against the past is not corrected twice. `transition_since(t_v)` is the
+product of the Phi from t_v to the live state (a step cut by t_v contributes
+I + f (Phi - I), f the fraction of the step after t_v): the engine's delay-aware measurement
+matrix is H Phi^-1 (transfer_alignment.py).
+
+LDV history: each sample by validity time, with the launch flag (`moving`) and the deck
+displacement integrated up to it (trapezoids, as the engine integrates). At a time between
+two samples: linear interpolation when both are valid (exact for the constant acceleration of
+a catapult stroke; a change of acceleration inside the interval adds its bounded error to
+the measurement noise), else (parked only) the valid neighbour within half the sample
+spacing, else no measurement (LdvHistory).
+"""
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from alignment_core.geometry.rotations import floats, normalized_f, quat_mul_f, slerp
+from alignment_core.navigation.strapdown import NavState
+
+# The helpers work in float arithmetic on the quaternions' components (strapdown.py: a numpy
+# operation on a 4-vector costs ~30 times a float operation) and return arrays.
+
+
+
+
+
+
+
+
+
+
+_EYES: dict[int, np.ndarray] = {}
+
+
+def _eye(n: int) -> np.ndarray:
+    """np.eye(n), cached (read only)."""
+    e = _EYES.get(n)
+    if e is None:
+        e = _EYES[n] = np.eye(n)
+        e.flags.writeable = False
+    return e
+
+
+@dataclass(slots=True)
+class SlaveSnapshot:
+    """The slave solution at t_ns and the transition of the step that starts there."""
+    t_ns: int
+    q_nb: np.ndarray
+    v_n: np.ndarray
+    lat: float
+    lon: float
+    h: float
+    phi: np.ndarray | None = None
+
+    def nav(self) -> NavState:
+        return NavState(q_nb=self.q_nb, v_n=self.v_n, lat=self.lat, lon=self.lon, h=self.h)
+
+
+class SlaveHistory:
+    """The slave solutions of the last IMU steps (the live one excluded)."""
+
+    def __init__(self, span_ns: int) -> None:
+        self.span_ns = int(span_ns)
+        self.items: deque[SlaveSnapshot] = deque()
+
+    def record(self, t_ns: int, nav: NavState) -> SlaveSnapshot:
+        """Store the live solution at t_ns before it is propagated; set its `phi` afterwards."""
+        s = SlaveSnapshot(t_ns, nav.q_nb, nav.v_n, nav.lat, nav.lon, nav.h)
+        self.items.append(s)
+        return s
+
+    def prune(self, keep_from_ns: int, t_live_ns: int) -> None:
+        """Drop the snapshots no lookup at or after keep_from_ns needs (the last one before
+        keep_from_ns stays: it brackets keep_from_ns with the next one, or with the live state)."""
+        it = self.items
+        while it and it[0].t_ns < keep_from_ns and (it[1].t_ns if len(it) > 1 else t_live_ns) <= keep_from_ns:
+            it.popleft()
+
+    def oldest_ns(self) -> int | None:
+        return self.items[0].t_ns if self.items else None
+
+    def state_at(self, t_ns: int, live: NavState, t_live_ns: int, max_step_ns: int
+                 ) -> tuple[NavState, np.ndarray | None] | None:
+        """(solution at t_ns, Phi from t_ns to the live state, None if not known), or None when
+        t_ns is older than the history, later than the live state, or inside a step longer than
+        max_step_ns (an IMU gap: no interpolation across it)."""
+        if t_ns == t_live_ns:
+            return live, None
+        it = self.items
+        if t_ns > t_live_ns or not it or t_ns < it[0].t_ns:
+            return None
+        k = len(it) - 1
+        while it[k].t_ns > t_ns:
+            k -= 1
+        a = it[k]
+        b_t, b_q, b_v, b_pos = ((it[k + 1].t_ns, it[k + 1].q_nb, it[k + 1].v_n,
+                                 (it[k + 1].lat, it[k + 1].lon, it[k + 1].h)) if k + 1 < len(it)
+                                else (t_live_ns, live.q_nb, live.v_n, (live.lat, live.lon, live.h)))
+        if t_ns == a.t_ns:
+            nav, f = a.nav(), 0.0
+        elif b_t - a.t_ns > max_step_ns:
+            return None
+        else:
+            f = (t_ns - a.t_ns) / (b_t - a.t_ns)
+            nav = NavState(q_nb=slerp(a.q_nb, b_q, f), v_n=a.v_n + f * (b_v - a.v_n),
+                           lat=a.lat + f * (b_pos[0] - a.lat), lon=a.lon + f * (b_pos[1] - a.lon),
+                           h=a.h + f * (b_pos[2] - a.h))
+        phi_acc = None
+        for j in range(k, len(it)):
+            p = it[j].phi
+            if p is None:
+                return nav, None
+            if j == k and f > 0.0:
+                eye = _eye(len(p))
+                p = eye + (1.0 - f) * (p - eye)
+            phi_acc = p if phi_acc is None else p @ phi_acc
+        return nav, phi_acc
+
+    def correct(self, q_corr: np.ndarray, dv: np.ndarray, dlat: float, dlon: float, dh: float) -> None:
+        """Apply a feedback correction (nav-frame rotation q_corr, velocity and position
+        changes) to every stored solution."""
+        qc = floats(q_corr)
+        for s in self.items:
+            s.q_nb = np.array(normalized_f(quat_mul_f(qc, floats(s.q_nb))))
+            s.v_n = s.v_n + dv
+            s.lat += dlat
+            s.lon += dlon
+            s.h += dh
+
+
+@dataclass(slots=True)
+class LdvRecord:
+    """The LDV at validity time t_ns: velocity (ship axes), validity, launch flag, the deck
+    displacement integrated up to t_ns, and the variance (m/s)^2 per axis an interpolation
+    adds (0 for a sample)."""
+    t_ns: int
+    v_s: np.ndarray
+    valid: bool
+    moving: bool
+    disp: np.ndarray
+    var: float = 0.0
+
+
+class LdvHistory:
+    """LDV samples by validity time, looked up at a master's validity time (module docstring).
+
+    Interpolation error: linear interpolation is exact while the acceleration is constant; a
+    change of acceleration (the launch, the release) inside [a, b] makes v_b deviate from the
+    extrapolation of the two samples before it by Delta = (k2 - k1)(1 - s) T (slopes k1, k2,
+    the change at the fraction s), and the interpolation error at the fraction f is then at
+    most |Delta| f. The part of Delta above three times its noise (sigma_ldv per sample) is
+    taken as a 1-sigma error of |Delta| f and added to the measurement noise. While the
+    aircraft moves, a time with only one valid neighbour gets no measurement (the nearest
+    sample would be off by a dt: 0.4 m/s at 2 g and 20 ms); while parked (the velocity is not
+    used, only the validity), the nearest valid sample within half the spacing counts."""
+
+    def __init__(self, span_ns: int, sigma_mps: float) -> None:
+        self.span_ns = int(span_ns)
+        self.sigma2 = float(sigma_mps) ** 2
+        self.items: deque[LdvRecord] = deque()
+        self.spacing_ns = 0                 # between the last two samples
+
+    def record(self, r: LdvRecord) -> None:
+        if self.items:
+            self.spacing_ns = r.t_ns - self.items[-1].t_ns
+        self.items.append(r)
+        while len(self.items) > 3 and self.items[2].t_ns < r.t_ns - self.span_ns:
+            self.items.popleft()
+
+    @property
+    def latest_ns(self) -> int | None:
+        return self.items[-1].t_ns if self.items else None
+
+    def at(self, t_ns: int) -> LdvRecord | None:
+        """The LDV at t_ns (class docstring), or None before the history or after its end."""
+        it = self.items
+        if not it or t_ns < it[0].t_ns:
+            return None
+        last = it[-1]
+        if t_ns >= last.t_ns:
+            return last if t_ns == last.t_ns else None
+        k = len(it) - 2
+        while it[k].t_ns > t_ns:
+            k -= 1
+        a, b = it[k], it[k + 1]
+        if t_ns == a.t_ns:
+            return a
+        span = b.t_ns - a.t_ns
+        f = (t_ns - a.t_ns) / span
+        if a.valid and b.valid:
+            v = a.v_s + f * (b.v_s - a.v_s)
+            disp = a.disp + 0.5 * (a.v_s + v) * ((t_ns - a.t_ns) * 1e-9) if b.moving else a.disp
+            return LdvRecord(t_ns, v, True, b.moving, disp, self._kink_variance(k, f))
+        if not (a.moving or b.moving):
+            for near in ((a, b) if f <= 0.5 else (b, a)):
+                if near.valid and abs(near.t_ns - t_ns) * 2 <= span:
+                    return near
+        return LdvRecord(t_ns, np.zeros(3), False, a.moving, a.disp)
+
+    def _kink_variance(self, k: int, f: float) -> float:
+        """Interpolation error variance at the fraction f of [it[k], it[k+1]] (class docstring)."""
+        if k == 0:
+            return 0.0
+        p, a, b = self.items[k - 1], self.items[k], self.items[k + 1]
+        if not p.valid:
+            return 0.0
+        rho = (b.t_ns - a.t_ns) / (a.t_ns - p.t_ns)
+        delta = b.v_s - (1.0 + rho) * a.v_s + rho * p.v_s
+        noise = self.sigma2 * (1.0 + (1.0 + rho) ** 2 + rho ** 2)
+        excess = float(delta @ delta) - 9.0 * 3.0 * noise
+        return excess * f * f if excess > 0.0 else 0.0

@@ -1,0 +1,3 @@
+"""Sensor models (simulation): slave IMU errors, master INS, LDV, Doppler radar, timing, presets."""
+
+

@@ -1,0 +1,3 @@
+"""The ship: sea states, spectra, RAOs, the paper mode and the MMG manoeuvring model (truth)."""
+
+

@@ -1,0 +1,3 @@
+"""Low-frequency manoeuvring: the MMG model, its autopilot and the course-keeping track."""
+
+

@@ -1,0 +1,88 @@
+"""Kalman filter against textbook identities and the closed-form posterior of a scalar
+random constant."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core.estimation.filters.kalman import KalmanFilter
+
+
+def random_spd(rng, n, scale=1.0):
+    a = rng.standard_normal((n, n))
+    return scale * (a @ a.T + n * np.eye(n))
+
+
+@pytest.mark.parametrize('seed', [1, 2, 3])
+def test_joseph_update_equals_textbook_form(seed):
+    rng = np.random.default_rng(seed)
+    n, m = 8, 3
+    p0 = random_spd(rng, n)
+    x0 = rng.standard_normal(n)
+    h = rng.standard_normal((m, n))
+    r = random_spd(rng, m, 0.1)
+    z = rng.standard_normal(m)
+    kf = KalmanFilter(x0, p0)
+    res = kf.update(z, h, r)
+    assert res.accepted
+    # textbook: S = H P H^T + R, K = P H^T S^-1, x+ = x + K (z - H x), P+ = (I - K H) P
+    s = h @ p0 @ h.T + r
+    k = p0 @ h.T @ np.linalg.inv(s)
+    y = z - h @ x0
+    np.testing.assert_allclose(res.innovation, y, atol=1e-12)
+    np.testing.assert_allclose(res.s, s, atol=1e-12)
+    assert res.nis == pytest.approx(y @ np.linalg.solve(s, y), rel=1e-12)
+    np.testing.assert_allclose(kf.x, x0 + k @ y, atol=1e-12)
+    np.testing.assert_allclose(kf.P, (np.eye(n) - k @ h) @ p0, atol=1e-12)
+    # information form: P+^-1 = P^-1 + H^T R^-1 H
+    np.testing.assert_allclose(np.linalg.inv(kf.P), np.linalg.inv(p0) + h.T @ np.linalg.inv(r) @ h,
+                               rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(kf.P, kf.P.T)
+    assert np.all(np.linalg.eigvalsh(kf.P) > 0.0)
+
+
+def test_predict_and_repeated_updates_stay_symmetric():
+    rng = np.random.default_rng(4)
+    n, m = 12, 3
+    kf = KalmanFilter(np.zeros(n), random_spd(rng, n))
+    phi = np.eye(n) + 0.01 * rng.standard_normal((n, n))
+    q = random_spd(rng, n, 1e-4)
+    h = np.hstack([np.zeros((m, 3)), np.eye(m), np.zeros((m, n - 6))])
+    r = 1e-4 * np.eye(m)
+    for _ in range(300):
+        p_prev = kf.P.copy()
+        kf.predict(phi, q)
+        np.testing.assert_allclose(kf.P, phi @ p_prev @ phi.T + q, rtol=1e-12, atol=1e-14)
+        kf.update(rng.standard_normal(m) * 1e-2, h, r)
+        np.testing.assert_array_equal(kf.P, kf.P.T)
+        assert np.linalg.eigvalsh(kf.P).min() > 0.0
+
+
+def test_gate_rejects_without_changing_state():
+    kf = KalmanFilter(np.zeros(2), np.eye(2))
+    h = np.array([[1.0, 0.0]])
+    r = np.array([[1.0]])
+    res = kf.update(np.array([10.0]), h, r, gate_chi2=9.0)       # NIS = 100 / 2 = 50
+    assert not res.accepted and res.nis == pytest.approx(50.0)
+    np.testing.assert_array_equal(kf.x, 0.0)
+    np.testing.assert_array_equal(kf.P, np.eye(2))
+    res = kf.update(np.array([1.0]), h, r, gate_chi2=9.0)        # NIS = 0.5
+    assert res.accepted
+
+
+def test_scalar_random_constant_posterior():
+    """x ~ N(0, p0), z_i = x + v_i with v_i ~ N(0, r): after n updates
+    P_n = 1 / (1/p0 + n/r) and x_n = P_n * sum(z_i) / r (the Bayesian posterior)."""
+    rng = np.random.default_rng(5)
+    p0, r, n = 4.0, 0.25, 500
+    x_true = rng.normal(0.0, np.sqrt(p0))
+    z = x_true + rng.normal(0.0, np.sqrt(r), n)
+    kf = KalmanFilter(np.zeros(1), np.array([[p0]]))
+    for i in range(n):
+        kf.predict(np.eye(1), np.zeros((1, 1)))
+        kf.update(z[i:i + 1], np.eye(1), np.array([[r]]))
+        p_i = 1.0 / (1.0 / p0 + (i + 1) / r)
+        assert kf.P[0, 0] == pytest.approx(p_i, rel=1e-12)
+        assert kf.x[0] == pytest.approx(p_i * z[:i + 1].sum() / r, rel=1e-9, abs=1e-12)
+    # and the estimate is within 4 sigma of the truth
+    assert abs(kf.x[0] - x_true) < 4.0 * np.sqrt(kf.P[0, 0])

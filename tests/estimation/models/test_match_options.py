@@ -1,0 +1,156 @@
+"""The matching options any model may take where physics allows (models/rate_matching.py,
+master_delay.py, yaw_matching.py): their measurement rows against the geometry written out here,
+and what each buys in the engine against a truth the simulation sets (a master latency the
+filter is not told, a rigidly mounted aircraft on a rolling deck)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from nav_error_reference import expm_so3
+from scipy.spatial.transform import Rotation
+
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.estimation.config import FilterConfig
+from alignment_core.estimation.models import Corrections, Match
+from alignment_core.estimation.models.base import RateInputs
+from alignment_core.estimation.models.master_delay import MasterDelayState
+from alignment_core.estimation.models.rate_matching import RateMatching
+from alignment_core.estimation.models.seed003 import Seed003VelocityAttitude
+from alignment_core.estimation.models.velocity_matching import VelocityMatching
+from alignment_core.estimation.models.yaw_matching import YawMatching
+from alignment_core.navigation.strapdown import NavState
+from alignment_core.units import ARCMIN, DPH
+from alignment_core.validation import ConfigError
+from alignment_experiments.monte_carlo import RunSpec, run_one
+
+C_M = Rotation.from_euler('ZYX', [33.0, 2.5, -4.0], degrees=True).as_matrix()   # true ship attitude
+MU = np.array([15.0, -10.0, -30.0]) * ARCMIN                                      # true mounting
+W_M = np.array([0.02, -0.03, 0.01])        # ship body rate w.r.t. nav, rad/s
+W_IN = np.array([0.0, 5.2e-5, 5.6e-5])     # Earth + transport rate, nav axes
+H = 0.01
+
+
+def _rate_z(phi, eps, phi_m, theta_dot, model):
+    """The rate measurement from its definition. Truth: the nav frame is held still and the ship
+    turns at the constant inertial rate Omega = C_m w_m + w_in, so the aircraft (C_a = C_m
+    exp(mu)) has the constant body rate C_a^T Omega, the same at every instant of the interval;
+    its gyros add eps and the flexure rate. The filter knows C_a,est = exp(-[phi x]) C_a at the
+    interval's end and the master's C_m,est = exp(-[phi_m x]) C_m."""
+    omega = C_M @ W_M + W_IN
+    c_a_end = expm_so3(omega * H / 2) @ C_M @ expm_so3(MU)        # the attitude at the interval's end
+    w_true = c_a_end.T @ omega
+    w_meas = w_true + eps + theta_dot
+    c_a_est = expm_so3(-phi) @ c_a_end
+    c_m_est = expm_so3(-phi_m) @ C_M
+    w_n = c_m_est @ W_M
+    rate = RateInputs(w_b=w_meas, dtheta=w_meas * H, omega_n=w_n + W_IN, w_n=w_n, w_dot_n=np.zeros(3), h=H)
+    m = Match(c_m=c_m_est, w_m=W_M, r=np.zeros(3), u_n=np.zeros(3), v_ref=np.zeros(3), z_vel=np.zeros(3),
+              r_vel=np.eye(3) * 1e-4, ins=NavState(q_nb=Rotation.from_matrix(c_a_est).as_quat(), v_n=np.zeros(3),
+                                                   lat=0.7, lon=2.0, h=0.0), rate=rate)
+    meas = model.measurement(m, Corrections())
+    return meas.z[-3:], meas.h[-3:]
+
+
+@pytest.mark.parametrize('base', ['vm15', 'seed003_24'])
+def test_rate_rows_vanish_on_the_truth_and_h_is_the_derivative(base):
+    cfg = FilterConfig(model=base)
+    b = VelocityMatching(cfg, True) if base == 'vm15' else Seed003VelocityAttitude(cfg, True)
+    model = RateMatching(b, arw=1e-6, sigma_w=1.0 * DPH)
+    zero = {k: np.zeros(3) for k in ('phi', 'eps', 'phi_m', 'theta_dot')}
+    z0, h = _rate_z(model=model, **zero)
+    # limit: no error anywhere -> the gyros read exactly the predicted rate (mid-interval attitude)
+    np.testing.assert_allclose(z0, 0.0, atol=1e-15)   # round-off of 0.04 rad/s
+    cols = {'phi': model.i_phi, 'eps': model.i_eps, 'phi_m': model.i_phi_m, 'theta_dot': model.i_theta_dot}
+    d = 1e-6
+    for name, i in cols.items():
+        if i is None:              # vm15 has no flexure rate: the truth's would be unmodelled
+            continue
+        num = np.stack([(_rate_z(model=model, **{**zero, name: d * e})[0]
+                         - _rate_z(model=model, **{**zero, name: -d * e})[0]) / (2 * d) for e in np.eye(3)], axis=1)
+        # exact to the neglected second order of the interval's rotation, (|Omega| h)^2 = 1.6e-7
+        np.testing.assert_allclose(h[:, i:i + 3], num, rtol=1e-6, atol=2e-7 * np.abs(num).max())
+    assert (model.i_theta_dot is None) == (base == 'vm15')
+
+
+def test_delay_column_is_the_reference_rate_of_change():
+    """dz/d(dt) for velocity + attitude + rate rows: the reference quantity reported dt late is
+    q(t - dt), so z gains q' dt; q' written out: the spot acceleration, the master attitude's
+    rotation (as phi_m = w_n dt, entering seed 003's rows as -phi_m) and the rate change."""
+    cfg = FilterConfig(model='seed003_21')
+    model = MasterDelayState(RateMatching(Seed003VelocityAttitude(cfg, False), 1e-6, 1e-5), 0.02)
+    a_n, w_n, w_dot = np.array([0.3, -0.2, 0.1]), C_M @ W_M, np.array([1e-3, -2e-3, 5e-4])
+    c_a = C_M @ expm_so3(MU)
+    rate = RateInputs(w_b=c_a.T @ (w_n + W_IN), dtheta=np.zeros(3), omega_n=w_n + W_IN, w_n=w_n, w_dot_n=w_dot, h=H)
+    m = Match(c_m=C_M, w_m=W_M, r=np.zeros(3), u_n=np.zeros(3), v_ref=np.zeros(3), z_vel=np.zeros(3),
+              r_vel=np.eye(3) * 1e-4, ins=NavState(q_nb=Rotation.from_matrix(c_a).as_quat(), v_n=np.zeros(3),
+                                                   lat=0.7, lon=2.0, h=0.0), w_n=w_n, a_n=a_n, rate=rate)
+    h = model.measurement(m, Corrections(mu=MU)).h
+    assert h.shape == (9, 22) and model.labels[-1] == 'dt_master'
+    np.testing.assert_allclose(h[:, -1], np.concatenate([a_n, -w_n, c_a.T @ w_dot]), rtol=1e-12, atol=1e-18)
+
+
+def test_yaw_matching_keeps_the_velocity_rows_and_the_heading_row():
+    cfg = FilterConfig(model='seed003_24')
+    full = Seed003VelocityAttitude(cfg, True)
+    yaw = YawMatching(full)
+    c_a = C_M @ expm_so3(MU + 1e-3)
+    m = Match(c_m=C_M, w_m=W_M, r=np.zeros(3), u_n=np.array([0.1, 0.2, 0.0]), v_ref=np.zeros(3),
+              z_vel=np.array([0.01, -0.02, 0.003]), r_vel=np.eye(3) * 1e-4,
+              ins=NavState(q_nb=Rotation.from_matrix(c_a).as_quat(), v_n=np.zeros(3), lat=0.7, lon=2.0, h=0.0))
+    a, b = full.measurement(m, Corrections(mu=MU)), yaw.measurement(m, Corrections(mu=MU))
+    rows = [0, 1, 2, 5]
+    np.testing.assert_array_equal(b.z, a.z[rows])
+    np.testing.assert_array_equal(b.h, a.h[rows])
+    np.testing.assert_array_equal(b.r, a.r[np.ix_(rows, rows)])
+    assert yaw.attitude_rows == (2,)
+
+
+@pytest.mark.parametrize('overrides,message', [
+    ({'filter.attitude_match_axes': 'yaw'}, 'mounting yaw'),
+    ({'filter.attitude_match_axes': 'roll'}, 'attitude_match_axes'),
+    ({'filter.model': 'seed002_10', 'filter.rate_matching': True}, 'rate_matching needs'),
+    ({'filter.rate_matching': True, 'filter.algorithm': 'stf'}, 'same rows at every update'),
+    ({'filter.model': 'seed000_large_angle', 'filter.algorithm': 'ekf', 'filter.master_delay_state': True},
+     'master_delay_state needs'),
+    ({'filter.master_delay_sigma_ms': 0.0}, 'master_delay_sigma_ms'),
+    ({'filter.rate_match_sigma_dph': -1.0}, 'rate_match_sigma_dph'),
+])
+def test_invalid_option_combinations_are_refused(overrides, message):
+    with pytest.raises(ConfigError, match=message):
+        scenario.load('deck', overrides)
+
+
+def _deck(extra: dict, seconds: float = 40.0):
+    ov = tuple({'duration_s': seconds, **extra}.items())
+    return run_one(RunSpec(0, 'x', 'deck', ov, 3, score_at=seconds - 0.5))
+
+
+def test_delay_state_estimates_a_master_latency_the_filter_is_not_told():
+    """The master INS's data reach the filter 30 ms late (sensor stamps = validity + 30 ms) while
+    filter.master_latency_s says 0. Matching the ship's 0.1-0.3 m/s^2 deck accelerations against
+    a 30 ms-old reference costs several arcmin; the delay state finds the 30 ms (the simulated
+    latency) and restores an error within the filter's own sigma."""
+    late = {'master.latency_s': 0.03}
+    blind = _deck(late)
+    assert np.max(np.abs(blind.err) / blind.sigma) > 5.0          # the unmodelled lag: a biased filter
+    sc = scenario.load('deck', {'duration_s': 40.0, **late, 'filter.master_delay_state': True}, seed=3)
+    res = pipeline.run(sc, keep_truth=False)
+    i = res.filter.labels.index('dt_master')
+    e = res.estimates[-1]
+    assert abs(e.x[i] - 0.03) < max(3.0 * e.sigma[i], 1e-4)
+    assert e.sigma[i] < 1e-3
+    told = _deck({**late, 'filter.master_delay_state': True})
+    assert np.all(np.abs(told.err) < 3.0 * told.sigma)
+
+
+def test_rate_matching_on_a_rigid_mount_sharpens_the_misalignment_and_stays_consistent():
+    """An aircraft rigid on the deck (no flexure in the truth) turns with the ship, so its gyros
+    and the master's rates differ only by the misalignment across the ship's rotation, eps and
+    noise: the rate rows see every axis within seconds, where velocity matching needs the deck's
+    accelerations. Margin: the 1-sigma after 40 s at least 5 times smaller, and the error inside 3
+    sigma on each axis."""
+    vel = _deck({})
+    rate = _deck({'filter.rate_matching': True})
+    assert np.all(rate.sigma * 5.0 < vel.sigma)
+    assert np.all(np.abs(rate.err) < 3.0 * rate.sigma)

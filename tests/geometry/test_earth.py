@@ -1,0 +1,218 @@
+"""WGS-84 Earth model against published constants and closed-form geometry.
+
+Expected values come from the WGS-84 definition (NIMA TR8350.2, 3rd ed.: a, 1/f, GM, omega,
+normal gravity on the equator and at the pole), from the geometry of an ellipse of
+revolution, and from the standard free-air gradient; never from `earth` itself.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core.geometry import earth
+
+# WGS-84 defining / derived constants, typed in from TR8350.2 (not imported from the module)
+WGS_A = 6378137.0
+WGS_INV_F = 298.257223563
+WGS_B = WGS_A * (1.0 - 1.0 / WGS_INV_F)             # 6356752.3142 m
+GAMMA_E = 9.7803253359                              # normal gravity on the equator, m/s^2
+GAMMA_P = 9.8321849379                              # normal gravity at the poles, m/s^2
+SIDEREAL_DAY_S = 86164.0905                          # Earth rotation period w.r.t. the stars
+FREE_AIR_GRADIENT = -3.086e-6                        # 0.3086 mGal/m, s^-2
+
+# one unit in the last place of an ECEF coordinate (|p| ~ 6.4e6 m) is 9.3e-10 m, and one ulp of
+# a latitude near 1 rad (2.2e-16 rad) is 1.4e-9 m on the ground: a geodetic <-> ECEF round trip
+# cannot be better than a few nanometres in double precision. Checked to 5 ulps (4.7e-9 m).
+ECEF_ULP = np.spacing(WGS_A)
+ROUND_TRIP_TOL_M = 5 * ECEF_ULP
+
+
+def test_normal_gravity_equator_and_pole():
+    assert earth.gravity(0.0, 0.0) == pytest.approx(GAMMA_E, abs=1e-10)
+    assert earth.gravity(np.pi / 2, 0.0) == pytest.approx(GAMMA_P, abs=1e-10)
+    assert earth.gravity(-np.pi / 2, 0.0) == pytest.approx(GAMMA_P, abs=1e-10)
+
+
+def test_normal_gravity_somigliana_at_any_latitude():
+    # Somigliana's closed form, with its constant built from the published gamma_e, gamma_p:
+    # gamma = (a gamma_e cos^2 + b gamma_p sin^2) / sqrt(a^2 cos^2 + b^2 sin^2)
+    lat = np.linspace(-np.pi / 2, np.pi / 2, 37)
+    c2, s2 = np.cos(lat) ** 2, np.sin(lat) ** 2
+    expected = (WGS_A * GAMMA_E * c2 + WGS_B * GAMMA_P * s2) / np.sqrt(WGS_A**2 * c2 + WGS_B**2 * s2)
+    np.testing.assert_allclose(earth.gravity(lat, 0.0), expected, rtol=0, atol=2e-10)
+
+
+@pytest.mark.parametrize('lat_deg', [0.0, 30.0, 45.0, 60.0, 90.0])
+def test_free_air_gradient(lat_deg):
+    lat = np.radians(lat_deg)
+    dgdh = (earth.gravity(lat, 1.0) - earth.gravity(lat, -1.0)) / 2.0
+    # the standard free-air gradient -0.3086 mGal/m; it varies by +-0.1 % with latitude
+    assert dgdh == pytest.approx(FREE_AIR_GRADIENT, rel=2e-3)
+    # and over a few km the change stays linear to the same accuracy (h^2 term is 1e-3 of it)
+    dg = earth.gravity(lat, 3000.0) - earth.gravity(lat, 0.0)
+    assert dg == pytest.approx(3000.0 * FREE_AIR_GRADIENT, rel=3e-3)
+
+
+def test_gravity_vector_points_down():
+    g = earth.gravity_n(np.radians([0.0, 40.0]), np.array([0.0, 100.0]))
+    assert g.shape == (2, 3)
+    np.testing.assert_array_equal(g[:, :2], 0.0)
+    assert np.all(g[:, 2] < -9.7)
+
+
+def test_radii_of_curvature_closed_form():
+    # ellipse of revolution: R_N(0) = a, R_M(0) = b^2 / a, R_M(90) = R_N(90) = a^2 / b
+    r_m, r_n = earth.radii(0.0)
+    assert r_n == pytest.approx(WGS_A, rel=1e-15)
+    assert r_m == pytest.approx(WGS_B**2 / WGS_A, rel=1e-14)
+    r_m, r_n = earth.radii(np.pi / 2)
+    assert r_m == pytest.approx(WGS_A**2 / WGS_B, rel=1e-14)
+    assert r_n == pytest.approx(WGS_A**2 / WGS_B, rel=1e-14)
+
+
+def test_radii_against_ellipse_geometry():
+    # R_N is the length of the normal from the surface to the polar axis: rho / cos(lat);
+    # R_M is the radius of curvature of the meridian ellipse: (a b)^2 / (a^2 sin^2 + b^2 cos^2)^1.5
+    # (parametrised by geodetic latitude, rho = a^2 cos / sqrt(a^2 cos^2 + b^2 sin^2))
+    lat = np.radians(np.linspace(-85.0, 85.0, 35))
+    c, s = np.cos(lat), np.sin(lat)
+    den = np.sqrt(WGS_A**2 * c**2 + WGS_B**2 * s**2)
+    rho = WGS_A**2 * c / den
+    r_m, r_n = earth.radii(lat)
+    np.testing.assert_allclose(r_n, rho / c, rtol=1e-14)
+    np.testing.assert_allclose(r_m, (WGS_A * WGS_B) ** 2 / den**3, rtol=1e-13)
+
+
+def test_geodetic_to_ecef_known_points():
+    np.testing.assert_allclose(earth.geodetic_to_ecef(0.0, 0.0, 0.0), [WGS_A, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(earth.geodetic_to_ecef(0.0, np.pi / 2, 0.0), [0.0, WGS_A, 0.0], atol=1e-9)
+    np.testing.assert_allclose(earth.geodetic_to_ecef(np.pi / 2, 0.3, 0.0), [0.0, 0.0, WGS_B], atol=1e-8)
+    np.testing.assert_allclose(earth.geodetic_to_ecef(-np.pi / 2, 0.3, 10.0), [0.0, 0.0, -WGS_B - 10.0],
+                               atol=1e-8)
+
+
+def test_geodetic_to_ecef_on_ellipsoid_and_height_along_normal():
+    rng = np.random.default_rng(11)
+    lat = rng.uniform(-np.pi / 2, np.pi / 2, 200)
+    lon = rng.uniform(-np.pi, np.pi, 200)
+    p0 = earth.geodetic_to_ecef(lat, lon, 0.0)
+    # on the ellipsoid x^2/a^2 + y^2/a^2 + z^2/b^2 = 1
+    q = (p0[:, 0] ** 2 + p0[:, 1] ** 2) / WGS_A**2 + p0[:, 2] ** 2 / WGS_B**2
+    np.testing.assert_allclose(q, 1.0, atol=1e-15 * 8)
+    # the geodetic normal (cos lat cos lon, cos lat sin lon, sin lat) is the ellipsoid's normal
+    n = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], axis=-1)
+    grad = np.stack([p0[:, 0] / WGS_A**2, p0[:, 1] / WGS_A**2, p0[:, 2] / WGS_B**2], axis=-1)
+    grad /= np.linalg.norm(grad, axis=-1, keepdims=True)
+    np.testing.assert_allclose(grad, n, atol=1e-14)
+    # height is measured along that normal
+    p1 = earth.geodetic_to_ecef(lat, lon, 1234.5)
+    np.testing.assert_allclose(p1 - p0, 1234.5 * n, atol=4 * ECEF_ULP)
+
+
+def test_geodetic_ecef_round_trip():
+    rng = np.random.default_rng(12)
+    n = 2000
+    lat = rng.uniform(np.radians(-89.99), np.radians(89.99), n)
+    lon = rng.uniform(-np.pi, np.pi, n)
+    h = rng.uniform(-1000.0, 20000.0, n)
+    p = earth.geodetic_to_ecef(lat, lon, h)
+    lat2, lon2, h2 = earth.ecef_to_geodetic(p)
+    r_m, r_n = earth.radii(lat)
+    # geodetic differences expressed in metres
+    err = np.abs(np.stack([(lat2 - lat) * (r_m + h), (lon2 - lon) * (r_n + h) * np.cos(lat),
+                           h2 - h], axis=-1))
+    assert err.max() < ROUND_TRIP_TOL_M
+    # ECEF -> geodetic -> ECEF
+    p2 = earth.geodetic_to_ecef(lat2, lon2, h2)
+    assert np.linalg.norm(p2 - p, axis=-1).max() < ROUND_TRIP_TOL_M
+
+
+def test_ecef_to_enu_axes_are_geodetic_directions():
+    # east = d p / d lon normalised, north = d p / d lat normalised, up = the ellipsoid normal
+    lat, lon, d = np.radians(40.0), np.radians(116.0), 1e-7
+    c = earth.c_ecef_to_enu(lat, lon)
+    np.testing.assert_allclose(c @ c.T, np.eye(3), atol=1e-15)
+    assert np.linalg.det(c) == pytest.approx(1.0, abs=1e-15)
+    east = earth.geodetic_to_ecef(lat, lon + d, 0.0) - earth.geodetic_to_ecef(lat, lon - d, 0.0)
+    north = earth.geodetic_to_ecef(lat + d, lon, 0.0) - earth.geodetic_to_ecef(lat - d, lon, 0.0)
+    up = earth.geodetic_to_ecef(lat, lon, 1.0) - earth.geodetic_to_ecef(lat, lon, -1.0)
+    for row, v in zip(c, (east, north, up)):
+        np.testing.assert_allclose(row, v / np.linalg.norm(v), atol=1e-8)
+
+
+def test_tangent_plane_geometry_and_round_trip():
+    lat0, lon0, h0 = np.radians(40.0), np.radians(116.0), 5.0
+    tp = earth.TangentPlane(lat0, lon0, h0)
+    np.testing.assert_allclose(tp.from_geodetic(lat0, lon0, h0), 0.0, atol=4 * ECEF_ULP)
+    # straight up the local normal
+    np.testing.assert_allclose(tp.from_geodetic(lat0, lon0, h0 + 100.0), [0.0, 0.0, 100.0],
+                               atol=4 * ECEF_ULP)
+    # a small step north / east: R_M dlat, (R_N + h) cos(lat) dlon (second order ~1e-6 m)
+    r_m, r_n = earth.radii(lat0)
+    dl = 1e-6
+    np.testing.assert_allclose(tp.from_geodetic(lat0 + dl, lon0, h0), [0.0, (r_m + h0) * dl, 0.0],
+                               atol=1e-5)
+    np.testing.assert_allclose(tp.from_geodetic(lat0, lon0 + dl, h0),
+                               [(r_n + h0) * np.cos(lat0) * dl, 0.0, 0.0], atol=1e-5)
+    # round trip over +-50 km, +-5 km
+    rng = np.random.default_rng(13)
+    enu = rng.uniform([-5e4, -5e4, -5e3], [5e4, 5e4, 5e3], (500, 3))
+    back = tp.from_geodetic(*tp.to_geodetic(enu))
+    assert np.abs(back - enu).max() < ROUND_TRIP_TOL_M
+    # and a rigid transform: distances are preserved
+    lat, lon, h = tp.to_geodetic(enu)
+    p = earth.geodetic_to_ecef(lat, lon, h)
+    np.testing.assert_allclose(np.linalg.norm(p[1:] - p[:-1], axis=-1),
+                               np.linalg.norm(enu[1:] - enu[:-1], axis=-1), atol=8 * ECEF_ULP)
+
+
+def test_earth_rate():
+    omega = 2.0 * np.pi / SIDEREAL_DAY_S
+    lat = np.radians(np.linspace(-89.0, 89.0, 19))
+    w = earth.omega_ie_n(lat)
+    np.testing.assert_allclose(np.linalg.norm(w, axis=-1), omega, rtol=1e-6)
+    # the Earth's axis in ENU: (0, cos lat, sin lat); nothing along East
+    np.testing.assert_allclose(w / np.linalg.norm(w, axis=-1, keepdims=True),
+                               np.stack([0 * lat, np.cos(lat), np.sin(lat)], axis=-1), atol=1e-15)
+    # same vector as the ECEF spin axis rotated into ENU
+    c = earth.c_ecef_to_enu(np.radians(40.0), np.radians(-70.0))
+    np.testing.assert_allclose(earth.omega_ie_n(np.radians(40.0)), c @ [0.0, 0.0, earth.OMEGA_IE],
+                               atol=1e-18)
+
+
+def test_transport_rate():
+    # moving east at v along a parallel turns the nav frame about the Earth's axis at
+    # v / ((R_N + h) cos lat); moving north turns it about -East at v / (R_M + h)
+    lat, h, v = np.radians(40.0), 2000.0, 150.0
+    c, s = np.cos(lat), np.sin(lat)
+    den = np.sqrt(WGS_A**2 * c**2 + WGS_B**2 * s**2)
+    r_n = WGS_A**2 / den
+    r_m = (WGS_A * WGS_B) ** 2 / den**3
+    rate = v / ((r_n + h) * c)
+    np.testing.assert_allclose(earth.omega_en_n(lat, h, [v, 0.0, 0.0]), [0.0, rate * c, rate * s],
+                               rtol=1e-13, atol=1e-20)
+    np.testing.assert_allclose(earth.omega_en_n(lat, h, [0.0, v, 0.0]), [-v / (r_m + h), 0.0, 0.0],
+                               rtol=1e-13, atol=1e-20)
+    np.testing.assert_array_equal(earth.omega_en_n(lat, h, [0.0, 0.0, 7.0]), 0.0)
+
+
+@pytest.mark.parametrize('lat_deg,h,v', [(0.0, 0.0, (0.0, 0.0, 0.0)), (40.0, 120.0, (5.0, 8.0, 0.3)),
+                                         (-65.0, 3000.0, (-150.0, 60.0, -2.0))])
+def test_local_scalar_fast_path(lat_deg, h, v):
+    """The strapdown's scalar path: radii, Earth and transport rates and |g| from the same
+    closed forms as above (ellipse geometry, Somigliana with the free-air terms)."""
+    lat = np.radians(lat_deg)
+    c, s = np.cos(lat), np.sin(lat)
+    den = np.sqrt(WGS_A**2 * c**2 + WGS_B**2 * s**2)
+    r_n, r_m = WGS_A**2 / den, (WGS_A * WGS_B) ** 2 / den**3
+    got_rm, got_rn, w_ie, w_en, g = earth.local_scalar(lat, h, np.array(v))
+    assert got_rm == pytest.approx(r_m, rel=1e-13)
+    assert got_rn == pytest.approx(r_n, rel=1e-13)
+    omega = 2.0 * np.pi / SIDEREAL_DAY_S
+    np.testing.assert_allclose(w_ie, omega * np.array([0.0, c, s]), rtol=1e-6, atol=1e-20)
+    np.testing.assert_allclose(w_en, [-v[1] / (r_m + h), v[0] / (r_n + h), v[0] * s / c / (r_n + h)],
+                               rtol=1e-12, atol=1e-20)
+    g0 = (WGS_A * GAMMA_E * c**2 + WGS_B * GAMMA_P * s**2) / den
+    assert earth.local_scalar(lat, 0.0, np.array(v))[4] == pytest.approx(g0, abs=2e-10)
+    # free-air change, to the same 0.3 % as test_free_air_gradient
+    assert g - g0 == pytest.approx(FREE_AIR_GRADIENT * h, rel=3e-3, abs=1e-12)
