@@ -2,6 +2,9 @@
 # Start one node of the graph: scripts/start_node.sh NAME [--params-file F] [--ros-args ...]
 # NAME: ship_motion_node | master_ins_node | slave_ins_node | ldv_node | alignment_filter_node
 # Without --params-file the node runs the default scenario (config/params/graph.yaml).
+# Scenario keys on top (-p aircraft.lever_arm_m:=[60.0,-15.0,20.0]) act as run_graph.sh's --set:
+# the node resolves them with the same rules. An unknown or wrong-typed parameter stops the node
+# at start-up (exit status 2, one line naming it).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 [ -f "$ROOT/scripts/env.sh" ] && [ -d "$ROOT/ros2_ws/install" ] || "$ROOT/scripts/setup.sh"

@@ -5,5 +5,6 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$ROOT/scripts/setup.sh"
 . "$ROOT/scripts/env.sh"
 cd "$ROOT"
-ruff check src tests bench
+ruff check src tests bench experiments
+mypy                     # geometry/, navigation/, estimation/ (mypy.ini)
 exec python -m pytest -q tests "$@"

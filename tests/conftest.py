@@ -1,26 +1,16 @@
 """Shared test fixtures: `ros` starts project nodes as processes on a private ROS domain and
-drives them from an in-process rclpy node; `spin_until` spins that node until a condition."""
+drives them from an in-process rclpy node (helpers that are not fixtures live in tests/support/)."""
 from __future__ import annotations
 
 import os
 import signal
 import subprocess
-import time
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config/params/graph.yaml'
-
-
-def spin_until(node, cond, timeout: float = 30.0) -> None:
-    """Spin `node` until cond() holds; fail after `timeout` seconds."""
-    import rclpy
-    deadline = time.monotonic() + timeout
-    while not cond():
-        rclpy.spin_once(node, timeout_sec=0.05)
-        assert time.monotonic() < deadline, 'timed out'
 
 
 def _param_args(sets: dict) -> list[str]:

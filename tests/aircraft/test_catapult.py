@@ -15,12 +15,10 @@ its velocity relative to the deck is s' u. End speed = int a dt, stroke length =
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from support.ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate
 
 from alignment_core import pipeline
 from alignment_core.aircraft.catapult import stroke_end_speed, stroke_length
@@ -28,9 +26,6 @@ from alignment_core.config import scenario
 from alignment_core.samples import ShipBatch
 from alignment_core.units import ARCMIN, DEG, G0
 from alignment_core.validation import ConfigError
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'navigation'))
-from test_ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate  # noqa: E402
 
 LAUNCH, T = 2.0, 3.0
 SHORT = {**NOISE_OFF, 'duration_s': 6.0, 'aircraft.catapult.launch_time_s': LAUNCH,

@@ -4,12 +4,10 @@ is 1/e of sigma^2 at t = tau), and the aircraft truth with flexure stays consist
 ideal increments (strapdown from the true initial state)."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from support.ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate
 
 from alignment_core import pipeline
 from alignment_core.aircraft.deck_flexure import FlexureConfig, FlexureProcess
@@ -17,9 +15,6 @@ from alignment_core.config import scenario
 from alignment_core.gauss_markov import gm2_discrete
 from alignment_core.samples import ShipBatch
 from alignment_core.units import ARCMIN
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'navigation'))
-from test_ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate  # noqa: E402
 
 FLEX = {'aircraft.flexure.enabled': True}
 

@@ -15,12 +15,10 @@
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from support.ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
@@ -28,9 +26,6 @@ from alignment_core.geometry import earth
 from alignment_core.samples import ShipBatch
 from alignment_core.units import DEG
 from alignment_core.validation import ConfigError
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'navigation'))
-from test_ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate  # noqa: E402
 
 LAUNCH, STROKE = 2.0, 3.0
 RELEASE = LAUNCH + STROKE
@@ -74,7 +69,7 @@ def test_coordinated_turn_rate_and_bank(turn30):
     expect = earth.gravity(lat, h) * np.tan(30.0 * DEG) / V
     mid = steady[1:-1]
     np.testing.assert_allclose(rate[mid], expect[1:-1][mid], rtol=1e-5)
-    assert np.degrees(expect[steady].mean()) == pytest.approx(5.41, abs=0.01)   # seeds.md: ~5.4 deg/s
+    assert np.degrees(expect[steady].mean()) == pytest.approx(5.41, abs=0.01)   # docs/references.md: ~5.4 deg/s
     speed = np.linalg.norm(truth['v_b'], axis=1)
     np.testing.assert_allclose(speed[tau > RELEASE + 3.0], V, atol=1e-9)
     np.testing.assert_allclose(h[steady], h[steady][0], atol=1e-6)
@@ -102,7 +97,7 @@ def test_ball_centred_in_the_steady_turn(turn30):
 
 
 def test_turn_rate_given_derives_the_bank():
-    """turn_rate_dps = 10 at 60 m/s: bank atan(V omega / g) = 46.9 deg (seeds.md: ~47)."""
+    """turn_rate_dps = 10 at 60 m/s: bank atan(V omega / g) = 46.9 deg (docs/references.md)."""
     sc, truth, _, tau = run(f'turn duration_s=8 turn_rate_dps=10 speed_mps={V}; level', 20.0, ship__sea_state=0)
     lat, _, h = geodetic(sc, truth)
     steady = (tau > RELEASE + 3.05) & (tau < RELEASE + 8.0)

@@ -12,19 +12,14 @@ a(t) = A e^{-t/T} sin(w t + p) from the launch on the aircraft x and z axes (T t
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from support.ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
 from alignment_core.samples import ShipBatch
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'navigation'))
-from test_ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate  # noqa: E402
 
 A, F, T, P = 10.0, 100.0, 0.1, 45.0
 W = 2.0 * np.pi * F

@@ -1,5 +1,5 @@
 """End-to-end alignment (noise on, scenario defaults) against the physical limits of
-alignment.md, and determinism of the batch pipeline.
+docs/alignment.md, and determinism of the batch pipeline.
 
 Catapult (seed 000): deck matching levels the INS, the 2 g stroke gives heading; a best-case
 prototype reached RMS pitch / roll / yaw ~ 0.08' / 0.3' / 0.09' (roll bias-limited:

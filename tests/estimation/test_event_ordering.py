@@ -6,10 +6,10 @@ import dataclasses
 
 import numpy as np
 import pytest
+from support.engine_feed import feed_in_order, random_interleaving
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
-from alignment_core.estimation.engine import TransferAlignment
 
 SC = scenario.load('catapult', {'duration_s': 6.0, 'aircraft.catapult.launch_time_s': 3.0})
 
@@ -17,15 +17,6 @@ SC = scenario.load('catapult', {'duration_s': 6.0, 'aircraft.catapult.launch_tim
 @pytest.fixture(scope='module')
 def inputs():
     return pipeline.simulate(SC)
-
-
-def _run(events) -> TransferAlignment:
-    f = TransferAlignment(SC.filter, pipeline.plane_of(SC), SC.rate_hz)
-    for kind, item in events:
-        getattr(f, 'push_' + kind)(item)
-        f.process()
-    f.process(final=True)
-    return f
 
 
 def _events(inp):
@@ -40,15 +31,7 @@ def test_random_interleavings_give_identical_outputs(inputs):
     ref = _outputs(pipeline.align(SC, inputs))
     rng = np.random.default_rng(3)
     for _ in range(3):
-        streams = [list(s) for s in _events(inputs)]
-        merged = []
-        # random interleaving that keeps each stream's own order, with bursts and lags
-        while any(streams):
-            i = rng.choice([k for k in range(3) if streams[k]])
-            n = int(rng.integers(1, 40))
-            merged += streams[i][:n]
-            del streams[i][:n]
-        out = _outputs(_run(merged))
+        out = _outputs(feed_in_order(SC, random_interleaving(inputs, rng)))
         assert np.array_equal(out, ref)
 
 
@@ -58,7 +41,7 @@ def test_nonfinite_and_out_of_order_inputs_are_rejected_and_counted(inputs):
                                   gyro=np.array([np.nan, 0.0, 0.0]))
     stale = inputs.master[50]
     events = imu[:200] + [('imu', bad_imu)] + imu[200:] + ldv + master[:300] + [('master', stale)] + master[300:]
-    f = _run(events)
+    f = feed_in_order(SC, events)
     assert f.counters.rejected_nonfinite == 1
     assert f.counters.rejected_out_of_order == 1
     assert np.array_equal(_outputs(f), _outputs(pipeline.align(SC, inputs)))
@@ -67,7 +50,7 @@ def test_nonfinite_and_out_of_order_inputs_are_rejected_and_counted(inputs):
 def test_imu_gap_is_counted_and_the_filter_keeps_running(inputs):
     imu, ldv, master = _events(inputs)
     events = imu[:100] + imu[110:] + ldv + master
-    f = _run(events)
+    f = feed_in_order(SC, events)
     assert f.counters.imu_gaps == 1
     assert len(f.outputs) == len(pipeline.align(SC, inputs).outputs)
     assert all(np.all(np.isfinite(e.misalignment)) for e in f.outputs)

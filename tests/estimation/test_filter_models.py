@@ -25,7 +25,7 @@ def test_default_is_the_15_state_velocity_matching_kf():
     assert (cfg.model, cfg.algorithm, cfg.lever_arm_treatment, cfg.lever_arm_states) == ('vm15', 'kf', 'compensation',
                                                                                          False)
     f = TransferAlignment(scenario.load('catapult').filter, pipeline.plane_of(scenario.load('catapult')), 100.0)
-    assert f.n == 15 and f.labels[-3:] == ('phim_E', 'phim_N', 'phim_U')
+    assert f.n_states == 15 and f.labels[-3:] == ('phim_E', 'phim_N', 'phim_U') and f.model_name == 'vm15'
 
 
 def test_model_names_are_the_config_choices():
@@ -38,7 +38,7 @@ def test_every_model_runs_in_the_engine_and_labels_its_state(model):
     sc = scenario.load('deck', {**SHORT, 'filter.model': model, 'filter.algorithm': algorithm,
                                 'doppler.enabled': model == 'seed001_13'})
     res = pipeline.run(sc, keep_truth=False)
-    n = res.filter.n
+    n = res.filter.n_states
     assert len(res.filter.labels) == n == len(set(res.filter.labels))
     e = res.estimates[-1]
     assert e.x.shape == (n,) and e.sigma.shape == (n,) and e.attitude_cov.shape == (3, 3)
@@ -111,7 +111,7 @@ def test_lever_arm_states_recover_a_surveying_error():
     truth_dr = np.array([-1.0, 1.0, -0.5])
     sig_dr = e.sigma[-3:]
     assert res.filter.labels[-3:] == ('dr_x', 'dr_y', 'dr_z')
-    assert np.all(np.abs(res.filter.corr.dr - truth_dr) < 3.0 * sig_dr) and np.all(sig_dr < 0.05)
+    assert np.all(np.abs(res.filter.corrections.dr - truth_dr) < 3.0 * sig_dr) and np.all(sig_dr < 0.05)
     err = e.misalignment - np.array(sc.aircraft.misalignment_arcmin) * ARCMIN
     assert np.all(np.abs(err) < 3.0 * e.misalignment_sigma)
     e0 = pipeline.run(scenario.load('deck', ov), keep_truth=False).estimates[-1]
@@ -142,5 +142,5 @@ def test_fading_factors_reach_the_outputs(algorithm, shape):
     res = pipeline.run(sc, keep_truth=False)
     lam = [np.asarray(e.fading) for e in res.estimates]
     assert all(x.shape == shape and np.all(x >= 1.0) for x in lam)
-    assert 'fading' in res.filter.filter_diagnostics()
+    assert 'fading' in res.filter.diagnostics().filter
     assert max(float(np.max(x)) for x in lam) > 1.0          # low beta / gamma: they fade at least once

@@ -2,12 +2,13 @@
 False) while the slave runs free inertial, never an exception out of a node's callback."""
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
-from alignment_core.estimation.engine import TransferAlignment
 
 SHORT = {'duration_s': 6.0, 'aircraft.catapult.launch_time_s': 3.0}
 F32_SEED003 = {**SHORT, 'filter.model': 'seed003_21', 'filter.float32': True}
@@ -40,29 +41,27 @@ def test_square_root_filters_stay_healthy_in_single_precision(algorithm):
     assert res.filter.counters.numerical_failures == 0 and all(e.healthy for e in res.estimates)
 
 
-def test_a_corrupted_covariance_is_detected_at_the_next_update():
-    """Float64: P made indefinite (a negative variance) in the middle of the run is caught at the
-    next update; the outputs before it are the healthy run's, the ones after hold the last good
-    estimate."""
-    sc = scenario.load('catapult', SHORT)
+@pytest.mark.parametrize('algorithm', ['kf', 'carlson'])
+def test_a_corrupted_master_sample_breaks_the_filter_down_and_the_last_estimate_is_held(algorithm):
+    """Float64: a master message whose velocity is corrupted to ~1e200 m/s is finite, so it passes
+    the input check, but its innovation squared overflows (a non-finite NIS) at its update. The
+    outputs before it are the clean run's, the ones after hold the last good estimate (the output
+    at the master sample before it), and the engine keeps publishing to the end."""
+    sc = scenario.load('catapult', {**SHORT, 'filter.algorithm': algorithm})
     inp = pipeline.simulate(sc)
     ref = pipeline.align(sc, inp)
-    f = TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
-    corrupt_at = inp.master[200].t_ns
-    for k in range(len(inp.ships)):
-        if k > 0:
-            f.push_imu(inp.imu[k - 1])
-        f.push_ldv(inp.ldv[k])
-        f.push_master(inp.master[k])
-        f.process()
-        if inp.master[k].t_ns == corrupt_at:
-            p = f.kf.P.copy()
-            p[4, 4] = -1e-6
-            f.kf.P = p
-    f.process(final=True)
-    assert f.counters.numerical_failures == 1 and not f.healthy
-    good = [e for e in f.outputs if e.healthy]
-    assert len(good) == 21 and len(f.outputs) == len(ref.outputs)
+    k = 201                                   # the master sample after the output at 2.0 s
+    master = list(inp.master)
+    master[k] = dataclasses.replace(master[k], v_b=master[k].v_b * 1e200)
+    with pytest.warns(RuntimeWarning, match='overflow'):
+        f = pipeline.align(sc, dataclasses.replace(inp, master=master))
+    assert f.counters.numerical_failures == 1 and not f.healthy and 'not finite' in f.failure
+    assert f.counters.updates == k - 1        # the first sample initialises
+    out = f.outputs
+    good = [e for e in out if e.healthy]
+    assert len(good) == 21 and len(out) == len(ref.outputs)
     for a, b in zip(good, ref.outputs):
-        assert np.array_equal(a.misalignment, b.misalignment)
-    assert all(np.array_equal(e.misalignment, good[-1].misalignment) for e in f.outputs[21:])
+        assert np.array_equal(a.misalignment, b.misalignment) and np.array_equal(a.sigma, b.sigma)
+    for e in out[21:]:
+        assert np.array_equal(e.misalignment, good[-1].misalignment) and np.array_equal(e.sigma, good[-1].sigma)
+        assert not e.matching

@@ -13,20 +13,15 @@ import numpy as np
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
-from alignment_core.estimation.engine import TransferAlignment
+from alignment_core.estimation.launch_detection import LaunchDetector, LaunchThresholds, LdvDecision
+from alignment_core.samples import LdvSample
 
 
 def _run(sc, ldv):
+    """The engine on the scenario's inputs with each LDV sample passed through `ldv`."""
     inp = pipeline.simulate(sc)
-    f = TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
-    for k in range(len(inp.ships)):
-        if k > 0:
-            f.push_imu(inp.imu[k - 1])
-        f.push_ldv(ldv(inp.ldv[k]))
-        f.push_master(inp.master[k])
-        f.process()
-    f.process(final=True)
-    return f, inp
+    inp = replace(inp, ldv=[ldv(s) for s in inp.ldv])
+    return pipeline.align(sc, inp), inp
 
 
 def test_a_single_ldv_spike_on_the_parked_deck_is_not_a_launch():
@@ -36,12 +31,12 @@ def test_a_single_ldv_spike_on_the_parked_deck_is_not_a_launch():
     def spiked(s):
         return replace(s, v_s=np.array([0.2, 0.0, 0.0])) if s.t_ns == spike_ns else s
     f, _ = _run(sc, spiked)
-    assert not f.moving and f.t_launch is None
+    assert not f.deck_motion.moving and f.deck_motion.t_launch_ns is None
     assert f.counters.unmatched_master == 0 and f.counters.updates == 600     # 601 samples, the first initialises
     # the old rule (one sample) takes it for the launch
     old = replace(sc, filter=replace(sc.filter, launch_confirm_samples=1))
     f1, _ = _run(old, spiked)
-    assert f1.moving and f1.t_launch == spike_ns
+    assert f1.deck_motion.moving and f1.deck_motion.t_launch_ns == spike_ns
 
 
 def test_the_catapult_launch_is_dated_at_its_first_sample():
@@ -52,14 +47,14 @@ def test_the_catapult_launch_is_dated_at_its_first_sample():
     sc = scenario.load('catapult', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 2.0})
     f, inp = _run(sc, lambda s: s)
     first = next(s.t_ns for s in inp.ldv if s.valid and np.linalg.norm(s.v_s) > sc.filter.launch_detect_mps)
-    assert f.t_launch == first
+    assert f.deck_motion.t_launch_ns == first
     k = next(i for i, s in enumerate(inp.ldv) if s.t_ns == first)
     v = inp.ldv[k - 1:]
     disp = np.zeros(3)
     for a, b in zip(v[:-1], v[1:]):
         if a.valid and b.valid:
             disp += 0.5 * (a.v_s + b.v_s) * (b.t_ns - a.t_ns) * 1e-9
-    np.testing.assert_allclose(f.deck_disp, disp, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(f.deck_motion.displacement, disp, rtol=1e-12, atol=1e-12)
     assert np.linalg.norm(disp) > 1.0
 
 
@@ -74,7 +69,57 @@ def test_hold_back_creep_is_deck_motion_but_not_the_launch():
     hold = sc.t0_ns + 8_000_000_000
     launch = sc.t0_ns + 10_000_000_000
     assert f.counters.creep_detected == 1
-    assert hold < f.t_moving < launch <= f.t_launch < launch + 100_000_000
+    motion = f.deck_motion
+    assert hold < motion.t_moving_ns < launch <= motion.t_launch_ns < launch + 100_000_000
     # a parked deck never creeps: the 1 cm/s LDV noise stays far below the median threshold
     g, _ = _run(scenario.load('deck', {'duration_s': 60.0}), lambda s: s)
-    assert g.counters.creep_detected == 0 and not g.moving
+    assert g.counters.creep_detected == 0 and not g.deck_motion.moving
+
+
+# ----- the detector on its own (estimation/launch_detection.py) -----
+def _detector(latency_ns: int = 0) -> LaunchDetector:
+    return LaunchDetector(LaunchThresholds(launch_mps=0.05, confirm_samples=3, creep_mps=0.02, creep_window=9,
+                                           ldv_latency_ns=latency_ns))
+
+
+def _ldv(t_ms: int, vx: float, valid: bool = True) -> LdvSample:
+    return LdvSample(t_ns=t_ms * 1_000_000, v_s=np.array([vx, 0.0, 0.0]), sigma=0.01, valid=valid)
+
+
+def test_a_confirmed_run_is_the_launch_dated_at_its_first_sample():
+    d = _detector(latency_ns=7_000_000)
+    run = [_ldv(t, 0.2) for t in (10, 20, 30)]
+    assert d.observe(run[0]) == LdvDecision() and d.observe(run[1]) == LdvDecision()   # held: no match
+    last = d.observe(run[2])
+    assert last.record == tuple(run) and last.launch_ns == 3_000_000 and not last.creep
+    assert d.moving and d.t_moving_ns == d.t_launch_ns == 3_000_000
+    nxt = _ldv(40, 0.3)
+    assert d.observe(nxt) == LdvDecision((nxt,))
+
+
+def test_a_broken_run_is_released_parked_and_gaps_do_not_count():
+    d = _detector()
+    fast, gap, slow = _ldv(10, 0.2), _ldv(20, 0.0, valid=False), _ldv(30, 0.01)
+    assert d.observe(fast) == LdvDecision() and d.observe(gap) == LdvDecision()
+    assert d.observe(slow) == LdvDecision((fast, gap, slow))
+    assert not d.moving and d.t_launch_ns is None
+    held = [_ldv(40, 0.2), _ldv(50, 0.0, valid=False), _ldv(60, 0.2)]
+    assert all(d.observe(s) == LdvDecision() for s in held)          # two fast of three: not yet
+    assert d.release() == tuple(held) and d.release() == ()          # the end of the data: parked
+
+
+def test_creep_is_motion_and_a_stroke_above_it_is_the_launch():
+    """Nine samples at 3 cm/s (each below 5 cm/s, the median of the 9-sample window above 2 cm/s):
+    creep at the ninth. Then the launch needs 3 samples in a row faster than the window's median
+    plus 5 cm/s: three at 7 cm/s are not (median 3 cm/s), the three at 20 cm/s after them are
+    (medians 3, 7, 7 cm/s)."""
+    d = _detector()
+    creep = [_ldv(10 * k, 0.03) for k in range(1, 10)]
+    decisions = [d.observe(s) for s in creep]
+    assert [x.creep for x in decisions] == [False] * 8 + [True]
+    assert all(x.record == (s,) and x.launch_ns is None for x, s in zip(decisions, creep, strict=True))
+    assert d.moving and d.t_moving_ns == 90_000_000 and d.t_launch_ns is None
+    assert all(d.observe(_ldv(t, 0.07)).launch_ns is None for t in (100, 110, 120))
+    assert d.t_launch_ns is None
+    launch = [d.observe(_ldv(t, 0.2)).launch_ns for t in (130, 140, 150)]
+    assert launch == [None, None, 130_000_000] and d.t_moving_ns == 90_000_000

@@ -1,9 +1,10 @@
 """Time-of-validity matching: master and LDV data valid at stamp - latency are compared with the
-slave solution at that time (validity_time.py, transfer_alignment.py), at their own rates."""
+slave solution at that time (navigation/history.py, docs/engine.md), at their own rates."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from support.engine_feed import feed_in_order, random_interleaving
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
@@ -184,25 +185,12 @@ def test_ldv_later_than_master_defers_the_match(zero_latency):
 def test_outputs_do_not_depend_on_arrival_order_with_latencies_and_rates():
     """Deferred matches (LDV later than the master, master at half the IMU rate, off-grid
     latencies) still depend only on the streams' contents, not on how they interleave."""
-    from alignment_core.estimation.engine import TransferAlignment
     sc = scenario.load('catapult', {'duration_s': 5.0, 'aircraft.catapult.launch_time_s': 3.0, 'master.rate_hz': 50.0,
                                     'master.latency_s': 0.013, 'ldv.latency_s': 0.03, 'filter.master_latency_s': 0.013,
                                     'filter.ldv_latency_s': 0.03})
     inp = pipeline.simulate(sc)
     ref = pipeline.align(sc, inp)
-    streams = [[('imu', s) for s in inp.imu], [('ldv', s) for s in inp.ldv], [('master', s) for s in inp.master]]
-    rng = np.random.default_rng(5)
-    merged = []
-    while any(streams):
-        i = rng.choice([k for k in range(3) if streams[k]])
-        n = int(rng.integers(1, 40))
-        merged += streams[i][:n]
-        del streams[i][:n]
-    f = TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
-    for kind, item in merged:
-        getattr(f, 'push_' + kind)(item)
-        f.process()
-    f.process(final=True)
+    f = feed_in_order(sc, random_interleaving(inp, np.random.default_rng(5)))
     out = [np.concatenate([e.misalignment, e.sigma, e.q_nb]) for e in f.outputs]
     assert ref.counters.updates > 100
     assert np.array_equal(np.array(out), np.array([np.concatenate([e.misalignment, e.sigma, e.q_nb])

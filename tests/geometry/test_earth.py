@@ -198,14 +198,15 @@ def test_transport_rate():
 
 @pytest.mark.parametrize('lat_deg,h,v', [(0.0, 0.0, (0.0, 0.0, 0.0)), (40.0, 120.0, (5.0, 8.0, 0.3)),
                                          (-65.0, 3000.0, (-150.0, 60.0, -2.0))])
-def test_local_scalar_fast_path(lat_deg, h, v):
+def test_local_terms_fast_path(lat_deg, h, v):
     """The strapdown's scalar path: radii, Earth and transport rates and |g| from the same
     closed forms as above (ellipse geometry, Somigliana with the free-air terms)."""
     lat = np.radians(lat_deg)
     c, s = np.cos(lat), np.sin(lat)
     den = np.sqrt(WGS_A**2 * c**2 + WGS_B**2 * s**2)
     r_n, r_m = WGS_A**2 / den, (WGS_A * WGS_B) ** 2 / den**3
-    got_rm, got_rn, w_ie, w_en, g = earth.local_scalar(lat, h, np.array(v))
+    got_rm, got_rn, wie_n, wie_u, wen_e, wen_n, wen_u, g = earth.local_terms(lat, h, v[0], v[1])
+    w_ie, w_en = np.array([0.0, wie_n, wie_u]), np.array([wen_e, wen_n, wen_u])
     assert got_rm == pytest.approx(r_m, rel=1e-13)
     assert got_rn == pytest.approx(r_n, rel=1e-13)
     omega = 2.0 * np.pi / SIDEREAL_DAY_S
@@ -213,6 +214,6 @@ def test_local_scalar_fast_path(lat_deg, h, v):
     np.testing.assert_allclose(w_en, [-v[1] / (r_m + h), v[0] / (r_n + h), v[0] * s / c / (r_n + h)],
                                rtol=1e-12, atol=1e-20)
     g0 = (WGS_A * GAMMA_E * c**2 + WGS_B * GAMMA_P * s**2) / den
-    assert earth.local_scalar(lat, 0.0, np.array(v))[4] == pytest.approx(g0, abs=2e-10)
+    assert earth.local_terms(lat, 0.0, v[0], v[1])[7] == pytest.approx(g0, abs=2e-10)
     # free-air change, to the same 0.3 % as test_free_air_gradient
     assert g - g0 == pytest.approx(FREE_AIR_GRADIENT * h, rel=3e-3, abs=1e-12)

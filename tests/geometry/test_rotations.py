@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from alignment_core import units
 from alignment_core.geometry import euler, rotations
@@ -44,6 +45,23 @@ def test_skew_is_cross_product():
         v, u = rng.standard_normal(3), rng.standard_normal(3)
         np.testing.assert_allclose(rotations.skew(v) @ u, np.cross(v, u), atol=1e-15)
         np.testing.assert_allclose(vee(rotations.skew(v)), v, atol=1e-15)
+    # batch over leading axes
+    v, u = rng.standard_normal((4, 2, 3)), rng.standard_normal((4, 2, 3))
+    k = rotations.skew(v)
+    assert k.shape == (4, 2, 3, 3)
+    np.testing.assert_allclose(np.einsum('...ij,...j->...i', k, u), np.cross(v, u), atol=1e-15)
+
+
+def test_skew_into_and_its_cells_write_the_skew_block():
+    v = np.array([0.3, -1.1, 2.5])
+    m = np.full((5, 7), 9.0)
+    rotations.skew_into(m, 1, 3, v)
+    want = np.full((5, 7), 9.0)
+    want[1:4, 3:6] = np.cross(v, np.eye(3)).T + np.diag([9.0, 9.0, 9.0])   # columns: v x e_j; diagonal untouched
+    np.testing.assert_array_equal(m, want)
+    flat = np.zeros((5, 7))
+    flat[tuple(zip(*rotations.skew_cells(1, 3), strict=True))] = rotations.skew_values(*v)
+    np.testing.assert_array_equal(flat[1:4, 3:6], np.cross(v, np.eye(3)).T)
 
 
 def test_unit_constants():
@@ -84,6 +102,12 @@ def test_rotvec_dcm_round_trip():
         k = rotations.skew(v / a)
         np.testing.assert_allclose(c, np.eye(3) + np.sin(a) * k + (1 - np.cos(a)) * k @ k, atol=1e-14)
         np.testing.assert_allclose(rotations.dcm_to_rotvec(c), v, atol=1e-12)
+        np.testing.assert_allclose(rotations.dcm_to_rotvec(Rotation.from_rotvec(v).as_matrix()), v, atol=1e-12)
+
+
+def test_scalar_rodrigues_is_the_rotation_of_its_vector():
+    for v in (np.array([1e-3, -2e-3, 5e-3]), np.array([0.3, -1.2, 2.0]), np.array([1e-8, 0.0, -3e-9]), np.zeros(3)):
+        np.testing.assert_allclose(rotations.rotvec_to_dcm(v), Rotation.from_rotvec(v).as_matrix(), rtol=0, atol=1e-15)
 
 
 def _dcm_derivative(e0, ed, t_step):
@@ -174,6 +198,7 @@ def test_cross_helpers_match_cross_product():
                      a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
     np.testing.assert_allclose(rotations.cross(a, b), want, atol=1e-15)
     np.testing.assert_allclose(rotations.cross3(a[0, 0], b[0, 0]), want[0, 0], atol=1e-15)
+    np.testing.assert_allclose(rotations.cross_f(a[0, 0].tolist(), b[0, 0].tolist()), want[0, 0], atol=1e-15)
     np.testing.assert_allclose(rotations.cross(a[0, 0], b)[2, 3], rotations.cross3(a[0, 0], b[2, 3]),
                                atol=1e-15)                               # broadcasting
     np.testing.assert_allclose(rotations.skew(a[0, 0]) @ b[0, 0], rotations.cross3(a[0, 0], b[0, 0]), atol=1e-15)
@@ -194,11 +219,50 @@ def test_quat_to_dcm_batch():
 
 
 @pytest.mark.parametrize('angle', [0.0, 1e-9, 9.9e-7, 1.01e-6, 1e-4, 0.3, 2.0, 3.1])
-def test_rotvec_dcm_batch_and_small_inverse(angle):
+def test_rotvec_dcm_batch_scalar_and_inverse(angle):
     u = np.array([2.0, -1.0, 0.5]) / np.linalg.norm([2.0, -1.0, 0.5])
     v = angle * u
     k = rotations.skew(u)
     want = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k          # Rodrigues
     c = rotations.rotvec_to_dcm_batch(np.stack([v, v]))
     np.testing.assert_allclose(c[0], want, atol=1e-15)
-    np.testing.assert_allclose(rotations.dcm_to_rotvec_small(want), v, atol=1e-14)
+    np.testing.assert_allclose(rotations.rotvec_to_dcm(v), want, atol=1e-15)
+    np.testing.assert_allclose(rotations.dcm_to_rotvec(want), v, atol=1e-14)
+
+
+@pytest.mark.parametrize('angle', [0.0, 1e-9, 9.9e-7, 1.01e-6, 1e-4, 0.3, 2.0, 3.1])
+def test_rotvec_quaternion_forms_against_scipy(angle):
+    u = np.array([-0.4, 1.0, 0.7]) / np.linalg.norm([-0.4, 1.0, 0.7])
+    v = angle * u
+    want = Rotation.from_rotvec(v).as_quat()           # (x, y, z, w), w >= 0 for angle < pi
+    np.testing.assert_allclose(rotations.rotvec_to_quat(v), want, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(rotations.rotvec_to_quat_batch(np.stack([v, 2 * v, v]))[[0, 2]], [want, want],
+                               rtol=0, atol=1e-15)
+    np.testing.assert_allclose(rotations.quat_to_rotvec(want), v, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(rotations.quat_to_rotvec(-want), v, rtol=0, atol=1e-14)    # the shorter rotation
+
+
+def test_axis_quaternions_and_products_against_scipy():
+    rng = np.random.default_rng(9)
+    ang = rng.uniform(-3.0, 3.0, (5, 2))
+    for axis in range(3):
+        v = np.zeros((5, 2, 3))
+        v[..., axis] = ang
+        want = Rotation.from_rotvec(v.reshape(-1, 3)).as_quat().reshape(5, 2, 4)
+        np.testing.assert_allclose(rotations.axis_quat_batch(ang, axis), want, rtol=0, atol=1e-15)
+    a, b = Rotation.random(4, random_state=1), Rotation.random(4, random_state=2)
+    np.testing.assert_allclose(rotations.quat_to_dcm_batch(rotations.quat_mul_batch(a.as_quat(), b.as_quat())),
+                               (a * b).as_matrix(), atol=1e-15)
+    np.testing.assert_allclose(rotations.quat_to_dcm(rotations.quat_mul(a[0].as_quat(), b[0].as_quat())),
+                               (a[0] * b[0]).as_matrix(), atol=1e-15)
+    np.testing.assert_allclose(rotations.quat_to_dcm(rotations.quat_conj(a[0].as_quat())), a[0].inv().as_matrix(),
+                               atol=1e-15)
+
+
+def test_rotate_attitude_turns_the_nav_frame():
+    # exp([phi x]) C_b^n: the nav-frame rotation applied on the left
+    q = Rotation.from_euler('ZYX', [40.0, -3.0, 7.0], degrees=True)
+    phi = np.array([2e-3, -1e-3, 4e-2])
+    got = rotations.rotate_attitude(q.as_quat(), phi)
+    np.testing.assert_allclose(rotations.quat_to_dcm(got), (Rotation.from_rotvec(phi) * q).as_matrix(), atol=1e-15)
+    assert np.linalg.norm(got) == pytest.approx(1.0, abs=1e-15)

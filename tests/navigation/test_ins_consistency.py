@@ -9,32 +9,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from support.ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, integrate, simulate
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
-from alignment_core.evaluation import strapdown_errors
 from alignment_core.samples import AircraftTruth, ShipBatch
 from alignment_core.sensors.ldv import LdvConfig, LdvModel
 from alignment_core.units import ARCMIN, G0
 
-NOISE_OFF = {'imu.gyro_bias_dph': 0.0, 'imu.accel_bias_ug': 0.0, 'imu.arw_dpsh': 0.0,
-             'imu.vrw_ugpshz': 0.0}
 LEVER_ARM = [60.0, -15.0, 20.0]
-ATT_TOL = 1e-6            # rad
-VEL_TOL = 1e-3            # m/s
-
-
-def simulate(sc):
-    """Ship samples, aircraft truth dict and ideal IMU samples for the whole scenario."""
-    ship_list = pipeline.ship_samples(sc)
-    ships = ShipBatch.of(ship_list)
-    truth, imu = pipeline.SlaveImuStage(sc).run_batch(ships)
-    return ship_list, truth, imu
-
-
-def integrate(sc, truth, imu):
-    """Strapdown from the true initial state; attitude and velocity errors after each sample."""
-    return strapdown_errors(pipeline.plane_of(sc), sc.t0_ns, truth, imu)
 
 
 @pytest.mark.parametrize('name,overrides', [

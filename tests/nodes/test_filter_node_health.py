@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numpy as np
 import rclpy
-from conftest import spin_until
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
+from support.ros_driving import spin_until
 
 from alignment_core import pipeline
 from alignment_core.config import scenario

@@ -7,11 +7,11 @@ import time
 from pathlib import Path
 
 import numpy as np
-from conftest import spin_until
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
+from support.ros_driving import spin_until
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
@@ -106,11 +106,3 @@ def test_parameters_are_frozen_while_running(ros):
     res = fut.result().results[0]
     assert not res.successful
     assert 'fixed while the node runs' in res.reason
-
-
-def test_default_params_file_is_the_catapult_scenario():
-    import yaml
-
-    from alignment_ros.params import flat_scenario
-    on_disk = yaml.safe_load(PARAMS.read_text())['/**']['ros__parameters']
-    assert on_disk == flat_scenario(scenario.load('catapult'))

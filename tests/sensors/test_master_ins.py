@@ -76,7 +76,7 @@ def test_damped_heading_settles_at_the_gyrocompass_equilibrium():
     eps_e = 0.01 * DPH
     cfg = MasterConfig(model='schuler', damping='velocity', gyrocompass_tau_s=3600.0)
     _, x = run(cfg, lat, [eps_e, 0, 0, 0, 0], 60.0, 0.5)
-    # alignment.md: 0.01 deg/h at 45 deg -> 3.2' of heading (the 'settled' start is there)
+    # docs/alignment.md: 0.01 deg/h at 45 deg -> 3.2' of heading (the 'settled' start is there)
     expected = -eps_e / (OMEGA * np.cos(lat))
     assert expected / ARCMIN == pytest.approx(-3.2, abs=0.05)
     np.testing.assert_allclose(x[:, 2], expected, rtol=0.02)

@@ -58,7 +58,7 @@ def test_unknown_preset_lists_the_names():
     with pytest.raises(ConfigError, match=r"master\.preset.*ship_medium"):
         scenario.from_dict({'master': {'preset': 'nope'}})
     with pytest.raises(ConfigError, match=r"imu.*unknown preset"):      # also when built directly
-        scenario.build_scenario({'imu': {'preset': 'nope'}})
+        scenario.resolve({'imu': {'preset': 'nope'}})
 
 
 @pytest.mark.parametrize('key, value, words', [

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import spin_until
 from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
+from support.ros_driving import spin_until
 
 from alignment_core import pipeline
 from alignment_core.config import scenario

@@ -1,9 +1,11 @@
-"""Ship configuration: validation errors, dispatch by mode, paper mode unchanged, and the
-low-frequency straight course (its position is the integral of its velocity)."""
+"""Ship configuration: validation errors, dispatch by mode, the paper mode is seed 002's
+sinusoids (Table 3 amplitudes at their periods), and the low-frequency straight course (its
+position is the integral of its velocity)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
@@ -40,20 +42,46 @@ def test_dispatch_by_mode():
         scenario.load('deck', {'ship.sea_state': 10})
 
 
-def test_paper_mode_is_unchanged():
-    """Numbers produced by the paper-mode ship before the spectral mode existed (commit
-    301e940), compared bit for bit."""
-    t = np.array([0.0, 12.34, 299.99])
-    sc = scenario.load('deck', {'ship.sea_state': 5, 'seed': 7})
-    s = make_motion(sc.ship, sc.seed).samples(t, 1000, 10)
-    np.testing.assert_array_equal(s[1].q_nb, [0.006855536188744811, 0.019266949835537263,
-                                              0.5112608086284454, 0.8591822692701405])
-    np.testing.assert_array_equal(s[1].w_b, [0.03338245040913687, -0.03533565228068215,
-                                             0.03754685636188148])
-    np.testing.assert_array_equal(s[2].a_b, [0.04420772856395579, -0.014692128494115634,
-                                             0.8747982500378224])
-    np.testing.assert_array_equal(s[2].p_w, [771.5045955173463, 1336.5603561868595,
-                                             -1.6071748372380203])
+def _sinusoid_fit(t, y, period):
+    """Least squares of y on [1, sin wt, cos wt]: (offset, amplitude, phase, max residual)."""
+    w = 2.0 * np.pi / period
+    a = np.column_stack([np.ones_like(t), np.sin(w * t), np.cos(w * t)])
+    c, *_ = np.linalg.lstsq(a, y, rcond=None)
+    return c[0], float(np.hypot(c[1], c[2])), float(np.arctan2(c[2], c[1])), float(np.max(np.abs(a @ c - y)))
+
+
+def test_paper_mode_is_seed_002s_sinusoids():
+    """Seed 002's ship (eq 18) at sea state 5, heading 30 deg, 10 kn: each Euler angle is one
+    sinusoid with the paper's Table 3 amplitude (roll 5.62, pitch 2.91, yaw 3.36 deg) at its
+    period (roll at the natural period 17 s, pitch, yaw and heave 7.5, 9.0 and 8.0 s); yaw about
+    the course (ENU yaw = 90 deg - heading); the vertical velocity is the heave rate, amplitude
+    (Hs / 2) w with Bales' mean Hs 3.25 m; the horizontal velocity is the course's. Phases are
+    random per axis: two seeds differ in every one."""
+    t = np.arange(0.0, 300.0, 0.25)
+    speed = 10.0 * 0.514444          # m/s: the project knot (1852 m / 3600 s to six digits, units.KNOT)
+    v_course = speed * np.array([np.sin(np.radians(30.0)), np.cos(np.radians(30.0))])
+    phases = []
+    for seed in (7, 8):
+        sc = scenario.load('deck', {'ship.sea_state': 5, 'seed': seed})
+        assert sc.ship.mode == 'paper' and sc.ship.heave and sc.ship.motion_scale == 1.0
+        assert (sc.ship.heading_deg, sc.ship.speed_kn) == (30.0, 10.0)
+        s = make_motion(sc.ship, sc.seed).samples(t, 0, 250_000_000)
+        rot = Rotation.from_quat([x.q_nb for x in s])
+        yaw, pitch, roll = np.unwrap(rot.as_euler('ZYX'), axis=0).T
+        v_n = rot.apply([x.v_b for x in s])
+        ph = []
+        for y, amp_want, period, offset in ((roll, np.radians(5.62), 17.0, 0.0),
+                                            (pitch, np.radians(2.91), 7.5, 0.0),
+                                            (yaw, np.radians(3.36), 9.0, np.radians(90.0 - 30.0)),
+                                            (v_n[:, 2], 0.5 * 3.25 * 2.0 * np.pi / 8.0, 8.0, 0.0)):
+            c0, amp, phase, resid = _sinusoid_fit(t, y, period)
+            assert c0 == pytest.approx(offset, abs=1e-9)
+            assert amp == pytest.approx(amp_want, rel=1e-9)
+            assert resid < 1e-9
+            ph.append(phase)
+        np.testing.assert_allclose(v_n[:, :2], np.broadcast_to(v_course, (len(t), 2)), rtol=0, atol=1e-9)
+        phases.append(ph)
+    assert np.min(np.abs(np.subtract(*phases))) > 1e-3
 
 
 @pytest.mark.parametrize('heading_deg', [0.0, 30.0, 90.0, 200.0])

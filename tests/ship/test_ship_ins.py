@@ -9,26 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support.ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, strapdown_errors
 
-from alignment_core import evaluation as consistency
-from alignment_core import pipeline
 from alignment_core.config import scenario
-from alignment_core.samples import ShipBatch
 
-NOISE_OFF = {'imu.gyro_bias_dph': 0.0, 'imu.accel_bias_ug': 0.0, 'imu.arw_dpsh': 0.0,
-             'imu.vrw_ugpshz': 0.0}
 SPECTRAL_SS6 = {'ship.mode': 'spectral', 'ship.sea_state': 6, 'ship.speed_kn': 20.0,
                 'ship.wave_heading_deg': 120.0}
-ATT_TOL = 1e-6            # rad
-VEL_TOL = 1e-3            # m/s
-
-
-def strapdown_errors(sc) -> tuple[np.ndarray, np.ndarray, dict]:
-    """Attitude (rad) and velocity (m/s) error norms after each IMU sample."""
-    ships = ShipBatch.of(pipeline.ship_samples(sc))
-    truth, imu = pipeline.SlaveImuStage(sc).run_batch(ships)
-    att, vel = consistency.strapdown_errors(pipeline.plane_of(sc), sc.t0_ns, truth, imu)
-    return att, vel, truth
 
 
 @pytest.mark.parametrize('lever_arm', [[90.0, -40.0, 15.0], [0.0, 0.0, 0.0]],

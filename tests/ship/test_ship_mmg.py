@@ -12,15 +12,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_ship_ins import NOISE_OFF, strapdown_errors
+from support.ins_consistency import ATT_TOL, NOISE_OFF, VEL_TOL, strapdown_errors
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
 from alignment_core.validation import ConfigError
 
 ROOT = Path(__file__).resolve().parents[2]
-ATT_TOL = 1e-6            # rad
-VEL_TOL = 1e-3            # m/s
 TURN_SS6 = {'ship.mode': 'spectral', 'ship.sea_state': 6, 'ship.speed_kn': 20.0,
             'ship.wave_heading_deg': 120.0, 'ship.course_keeping': 'mmg', 'ship.turn_at_s': 60.0,
             'ship.turn_to_deg': 120.0, 'ship.wind_speed_kn': 25.0, 'ship.wind_from_deg': 70.0}

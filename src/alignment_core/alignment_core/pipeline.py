@@ -160,4 +160,4 @@ def run(sc: Scenario, keep_truth: bool = True) -> BatchResult:
         truths = [AircraftTruth(t_ns=int(inp.ships.t_ns[k]), p_w=t['p_w'][k], q_nb=t['q_nb'][k],
                                 v_b=t['v_b'][k], w_b=t['w_b'][k], misalignment=mu,
                                 on_deck=bool(t['on_deck'][k])) for k in range(len(inp.ships))]
-    return BatchResult(sc, filt.outputs, truths, filt, time.perf_counter() - wall)
+    return BatchResult(sc, list(filt.outputs), truths, filt, time.perf_counter() - wall)

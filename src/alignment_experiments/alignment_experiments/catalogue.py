@@ -245,7 +245,7 @@ SEED002 = Experiment(
     title='Seed 002, Table 5: lever arm and sea state, KF vs Butterworth vs computational compensation',
     description=(
         "Seed 002's conditions: 126.67 E, 45.78 N, heading 30 deg, 18 kn; paper-mode ship (Table 3 "
-        "sinusoids; sea states 1-2 and 8-9 extended linearly in Hs, see ship.py); slave IMU preset seed002 "
+        "sinusoids; sea states 1-2 and 8-9 extended linearly in Hs, see ship/config.py); slave IMU preset seed002 "
         "(1e-4 g and 0.01 deg/h biases, 1e-4 scale factors); lever arm (1, 1, 1) m; initial misalignment "
         "1 deg per axis; 10-state model (dVx, dVy, phi, nabla_x,y, eps) with the paper's P0, Q0 and R0 = "
         "(0.1 m/s)^2; 300 s of horizontal velocity matching. Treatments: none (plain KF), the paper's "

@@ -5,8 +5,8 @@ Each run is independent and fully defined by its RunSpec (scenario, dotted overr
 seed), so the results do not depend on the number of workers, their order or the machine
 they ran on; results come back in spec order.
 
-Dask (optional, not installed by setup.sh): `pip install "dask[distributed]"` in the
-project's venv, start a scheduler and workers from a shell that sourced scripts/env.sh
+Dask (`dask[distributed]`, installed by setup.sh): start a scheduler and workers from a shell
+that sourced scripts/env.sh
 (`dask scheduler`, `dask worker tcp://HOST:8786 --nthreads 1`), then pass
 `--scheduler tcp://HOST:8786` (or `--scheduler local` for a local Dask cluster).
 """
@@ -132,12 +132,21 @@ def make_executor(workers: int, scheduler: str | None = None) -> Executor | None
         try:
             from dask.distributed import Client, LocalCluster
         except ImportError:
-            raise SystemExit('--scheduler needs Dask: pip install "dask[distributed]" in the project venv') from None
-        if scheduler == 'local':
-            client = Client(LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True))
-        else:
-            client = Client(scheduler)
-        return client.get_executor()
+            raise SystemExit('--scheduler needs Dask (requirements.txt): run scripts/setup.sh') from None
+        cluster = LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True) \
+            if scheduler == 'local' else None
+        client = Client(cluster if cluster is not None else scheduler)
+        ex = client.get_executor()
+        shutdown = ex.shutdown
+
+        def close(wait: bool = True, **kw) -> None:
+            """Shut the executor down, then its client and (local) cluster: no worker outlives the run."""
+            shutdown(wait=wait, **kw)
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        ex.shutdown = close
+        return ex
     if workers <= 1:
         return None
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context('fork'))

@@ -7,6 +7,8 @@ and reports the failure in /diagnostics (level ERROR, `healthy: false`, `numeric
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped, Vector3Stamped
@@ -17,13 +19,13 @@ from std_msgs.msg import Float64MultiArray
 from alignment_core import pipeline
 from alignment_core.estimation.engine import TransferAlignment
 from alignment_ros import convert, node_util, qos, topics
-from alignment_ros.params import ScenarioParameters
+from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
 
 class AlignmentFilterNode(node_util.CountingNode):
     def __init__(self) -> None:
         super().__init__('alignment_filter_node')
-        self.sc = ScenarioParameters(self).scenario
+        self.sc = ScenarioParameters(self, NODE_SCOPES['alignment_filter_node']).scenario
         self.plane = pipeline.plane_of(self.sc)
         self.engine = TransferAlignment(self.sc.filter, self.plane, self.sc.rate_hz)
         self.stream_publisher(Vector3Stamped, topics.ALIGN_MISALIGNMENT)
@@ -33,7 +35,7 @@ class AlignmentFilterNode(node_util.CountingNode):
         self.create_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu, qos.STREAM)
         self.create_subscription(Odometry, topics.MASTER_ODOM, self.on_master, qos.STREAM)
         self.create_subscription(TwistWithCovarianceStamped, topics.LDV_TWIST, self.on_ldv, qos.STREAM)
-        if self.engine.model.uses_doppler:
+        if self.engine.uses_doppler:
             self.create_subscription(TwistWithCovarianceStamped, topics.DOPPLER_TWIST, self.on_doppler, qos.STREAM)
         self.n_out = 0
         self.reported_failure = False
@@ -61,9 +63,12 @@ class AlignmentFilterNode(node_util.CountingNode):
         self._publish(self.engine.process())
 
     def _publish(self, estimates) -> None:
+        if not estimates:
+            return
+        nav = self.engine.solution          # the live slave solution: position of the published pose
+        assert nav is not None              # estimates exist only after initialisation
+        p_w = self.plane.from_geodetic(nav.lat, nav.lon, nav.h)
         for e in estimates:
-            lat, lon, h = self.engine.ins.s.lat, self.engine.ins.s.lon, self.engine.ins.s.h
-            p_w = self.plane.from_geodetic(lat, lon, h)
             mis, att, st = convert.estimate_to_msgs(e, self.engine.labels, p_w)
             self.send(topics.ALIGN_MISALIGNMENT, mis)
             self.send(topics.ALIGN_ATTITUDE, att)
@@ -78,12 +83,13 @@ class AlignmentFilterNode(node_util.CountingNode):
 
     def _diagnostics(self, e) -> DiagnosticArray:
         c = self.engine.counters
+        d = self.engine.diagnostics()
         bad = c.rejected_nonfinite + c.rejected_out_of_order + c.imu_gaps + c.unmatched_master
         level = DiagnosticStatus.OK if bad == 0 else DiagnosticStatus.WARN
         msg = 'aligning' if e.matching else 'free inertial (no matching)'
         if not e.healthy:
             level = DiagnosticStatus.ERROR
-            msg = f'numerical breakdown ({self.engine.failure}): last good estimate held, filter stopped'
+            msg = f'numerical breakdown ({d.failure}): last good estimate held, filter stopped'
         return convert.diagnostics(e.t_ns, 'alignment_filter', level, msg, {
             'nis': f'{e.nis:.4g}', 'updates': c.updates, 'gated': c.gated,
             'rejected_nonfinite': c.rejected_nonfinite,
@@ -91,8 +97,8 @@ class AlignmentFilterNode(node_util.CountingNode):
             'imu': c.imu, 'master': c.master, 'ldv': c.ldv, 'doppler': c.doppler,
             'doppler_updates': c.doppler_updates, 'unmatched_master': c.unmatched_master,
             'numerical_failures': c.numerical_failures, 'healthy': str(e.healthy).lower(),
-            'pending': self.engine.merger.pending(),
-            'model': self.engine.model.name, 'states': self.engine.n, 'algorithm': self.sc.filter.algorithm,
+            'pending': d.pending,
+            'model': self.engine.model_name, 'states': self.engine.n_states, 'algorithm': self.sc.filter.algorithm,
             'lever_arm_treatment': self.sc.filter.lever_arm_treatment,
             **_fading_values(e.fading)})
 
@@ -103,7 +109,7 @@ class AlignmentFilterNode(node_util.CountingNode):
 
     def stats(self) -> dict:
         d = super().stats()
-        d['filter'] = {k: v for k, v in vars(self.engine.counters).items() if k != 'extra'}
+        d['filter'] = dataclasses.asdict(self.engine.counters)
         return d
 
 

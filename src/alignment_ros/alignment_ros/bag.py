@@ -9,7 +9,7 @@ Log time
 --------
 rosbag2 stores the *receive* time as each message's log time. Our graph runs on simulation
 time, and a wall-clock receive time would make bags of the same scenario and seed differ, so
-the recorder stores **simulation time** instead (:func:`log_time_ns` is the rule):
+the recorder stores **simulation time** instead:
 
 1. the message's own stamp when its first field is a ``std_msgs/Header`` (``header.stamp``);
 2. the clock value itself for ``rosgraph_msgs/Clock`` (any type whose first field is a
@@ -116,11 +116,6 @@ def stamp_reader(type_name: str) -> Callable[[bytes | memoryview], int] | None:
     if isinstance(spec, str) and spec in HEADER_TYPES + TIME_TYPES:
         return _cdr_time_ns
     return None
-
-
-def log_time_ns(stamp_ns: int | None, sim_now_ns: int) -> int:
-    """Log time for a message: its stamp if it has one, else the recorder's current sim time."""
-    return stamp_ns if stamp_ns is not None else sim_now_ns
 
 
 # --- writing --------------------------------------------------------------------------------

@@ -172,10 +172,6 @@ def imu_bias_to_msg(t_ns: int, gyro_bias, accel_bias) -> Imu:
     return m
 
 
-def msg_to_imu_bias(m: Imu) -> tuple[int, np.ndarray, np.ndarray]:
-    return to_ns(m.header.stamp), _a3(m.angular_velocity), _a3(m.linear_acceleration)
-
-
 def vector_stamped(t_ns: int, frame: str, v) -> Vector3Stamped:
     m = Vector3Stamped()
     m.header.stamp = stamp(t_ns)

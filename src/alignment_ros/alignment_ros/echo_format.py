@@ -5,7 +5,7 @@ rosidl_runtime_py is not available here, so the conversion is rebuilt from each 
 ros2 uses (block style, ``allow_unicode=True``, unlimited width, field order kept), so
 floats print as Python's ``repr`` (``1.0e-05`` in YAML's spelling), strings are quoted only
 when YAML needs it (``''``, ``'1.5'``, ``'yes'``) and ``byte`` fields print as characters.
-``ros2 topic echo`` prints each document followed by a ``---`` line: see :func:`to_echo_doc`.
+``ros2 topic echo`` prints each document followed by a ``---`` line (echo.py adds it).
 """
 from __future__ import annotations
 
@@ -88,11 +88,6 @@ def to_yaml(msg: Any, *, truncate_length: int | None = None) -> str:
         width=sys.maxsize,
         default_flow_style=False,
     )
-
-
-def to_echo_doc(msg: Any, *, truncate_length: int | None = None) -> str:
-    """Return one ``ros2 topic echo`` document: the YAML text followed by a ``---`` line."""
-    return to_yaml(msg, truncate_length=truncate_length) + '---\n'
 
 
 # --- CSV ------------------------------------------------------------------------------------

@@ -1,13 +1,14 @@
 """Run the whole node graph for a scenario: recorder, filter, LDV, slave, master, ship.
 
-Each node is a separate process started through scripts/start_node.sh with one params file
-written from the scenario; the ship node starts the clock once every subscription is
-matched. When every stream of END_TOPICS has reached the scenario's end, the recorder says so;
-then the nodes get SIGINT and stop once every subscriber has acknowledged every message they
-sent; their published counts go to the recorder (stats/published.json), which records until
-it has all of them (no quiet-period guess: on a loaded machine a message the transport dropped
-arrives seconds later, when the reliable protocol resends it); then the summary is computed
-from the bag.
+Each node is a separate process started through scripts/start_node.sh with one params file:
+the scenario as given (its file's keys and --set), which each node resolves itself (params.py);
+the resolved scenario is written next to it (scenario.yaml). The ship node starts the clock
+once every subscription is matched. When every stream of END_TOPICS has reached the
+scenario's end, the recorder says so; then the nodes get SIGINT and stop once every subscriber
+has acknowledged every message they sent; their published counts go to the recorder
+(stats/published.json), which records until it has all of them (no quiet-period guess: on a
+loaded machine a message the transport dropped arrives seconds later, when the reliable
+protocol resends it); then the summary is computed from the bag.
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ from alignment_core.config import scenario as core_scenario
 from alignment_core.validation import ConfigError
 
 from . import domain, summary, topics
-from .params import flat_scenario
+from .params import given_parameters
 
 # matched subscriptions (recorder included) each node waits for before it sends on a topic
 MATCHED = {
@@ -65,10 +66,15 @@ def use_domain(preferred: int | None) -> int:
     return dom
 
 
-def write_params(sc: core_scenario.Scenario, path: Path, extra: dict | None = None) -> None:
-    params = flat_scenario(sc)
-    params.update(extra or {})
-    path.write_text(yaml.safe_dump({'/**': {'ros__parameters': params}}, sort_keys=False))
+def params_yaml(given: dict, sc: core_scenario.Scenario, header: str = '') -> str:
+    """A params file for every node: the scenario as given (nested; `sc` its resolution),
+    not resolved, so a node's -p has the effect --set has (a key given here stays fixed)."""
+    body = yaml.safe_dump({'/**': {'ros__parameters': given_parameters(given, sc)}}, sort_keys=False)
+    return header + body
+
+
+def write_params(given: dict, sc: core_scenario.Scenario, path: Path) -> None:
+    path.write_text(params_yaml(given, sc))
 
 
 def start(name: str, params: Path, out: Path, *args: str) -> subprocess.Popen:
@@ -179,7 +185,8 @@ def main(argv: list[str] | None = None) -> int:
                     help='ROS_DOMAIN_ID for the run (default: a free one, printed at the start)')
     a = ap.parse_args(argv)
     try:
-        sc = core_scenario.load(a.scenario, core_scenario.parse_overrides(a.sets), a.seed)
+        given = core_scenario.given_data(a.scenario, core_scenario.parse_overrides(a.sets), a.seed)
+        sc = core_scenario.resolve(given)
     except ConfigError as e:
         print(f'run_graph: {e}', file=sys.stderr)
         return 2
@@ -192,7 +199,7 @@ def main(argv: list[str] | None = None) -> int:
     use_domain(a.domain_id)
     (out / 'scenario.yaml').write_text(core_scenario.dump(sc))
     params = out / 'params.yaml'
-    write_params(sc, params)
+    write_params(given, sc, params)
     end_s = sc.start_time_s + sc.duration_s
     procs: dict[str, subprocess.Popen] = {}
     wall0 = time.monotonic()

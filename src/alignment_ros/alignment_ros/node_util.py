@@ -13,12 +13,16 @@ from pathlib import Path
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.experimental import EventsExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 
 from alignment_core.validation import ConfigError
 
-from . import qos
+from . import params, qos
+
+RCLError = rclpy_implementation.RCLError
 
 ACK_TIMEOUT_S = 30.0
 """At shutdown: how long a node waits for its subscribers to acknowledge every message. A
@@ -140,20 +144,33 @@ def stop_on_signals() -> dict[str, bool]:
     return stop
 
 
+def _refuse(message: str) -> None:
+    """Start-up error: one line on stderr, exit status 2."""
+    print(message, file=sys.stderr, flush=True)
+    rclpy.try_shutdown()
+    sys.exit(2)
+
+
 def run(node_factory, spin: bool = True) -> None:
-    """Create the node (config errors exit with status 2 and a one-line reason), spin until
-    SIGINT/SIGTERM, then send what is held, wait until every subscriber has acknowledged every
-    message (ACK_TIMEOUT_S), write stats and shut down.
+    """Create the node (invalid, unknown or wrong-typed parameters exit with status 2 and a
+    one-line reason), spin until SIGINT/SIGTERM, then send what is held, wait until every
+    subscriber has acknowledged every message (ACK_TIMEOUT_S), write stats and shut down.
 
     The EventsExecutor dispatches several times faster than the wait-set executors; it is
     spun from the main thread only (it runs no callbacks from a background thread)."""
-    rclpy.init(args=sys.argv)
+    try:
+        rclpy.init(args=sys.argv)
+    except RCLError as e:              # a -p rule rcl cannot parse
+        hint = (' (a list takes one type: write [1.0, 2.5], not [1, 2.5])'
+                if 'Sequence should be of same type' in str(e) else '')
+        _refuse(f'invalid arguments: {str(e).split(", at ")[0]}{hint}')
     try:
         node = node_factory()
+        params.refuse_unknown(node)
     except ConfigError as e:
-        print(f'invalid configuration: {e}', file=sys.stderr, flush=True)
-        rclpy.try_shutdown()
-        sys.exit(2)
+        _refuse(f'invalid configuration: {e}')
+    except (InvalidParameterTypeException, InvalidParameterValueException) as e:
+        _refuse(f'invalid configuration: {e}')   # a node parameter of the wrong type or value
     stop = stop_on_signals()
     executor = EventsExecutor()
     executor.add_node(node)

@@ -3,7 +3,8 @@ record its outputs to a new bag, and write the same summary.json as run_graph.
 
 Played: /clock, /master/odom, /aircraft/imu, /ldv/twist, and /doppler/twist when the bag has
 it (recorded only with doppler.enabled); the player waits for the filter's subscription to it
-when the filter's model matches the Doppler radar (filter.model in the params)."""
+when the filter's model matches the Doppler radar (filter.model, as the filter node resolves
+its parameters from the params file)."""
 from __future__ import annotations
 
 import argparse
@@ -14,13 +15,13 @@ import time
 from pathlib import Path
 
 import rclpy
-import yaml
 
 from alignment_core.estimation.models import DOPPLER_MODELS
 
 from . import summary, topics
 from .bag import BagError, BagReader
 from .graph import finish_recording, root, start, start_recorder, stop, use_domain, watch_end_time
+from .params import NODE_SCOPES, node_scenario, params_file_given
 from .topics import FILTER_OUTPUT_TOPICS, SENSOR_TOPICS
 
 HOLD = 'hold_until_matched:=[' + ','.join(f'"{t}:1"' for t in FILTER_OUTPUT_TOPICS) + ']'
@@ -52,8 +53,9 @@ def replay_topics(bag_topics, params: Path) -> tuple[list[str], list[str]]:
     wait = [f'{topics.AIRCRAFT_IMU}=1', f'{topics.MASTER_ODOM}=1', f'{topics.LDV_TWIST}=1']
     if topics.DOPPLER_TWIST in bag_topics:
         play.append(topics.DOPPLER_TWIST)
-        flat = (yaml.safe_load(params.read_text()) or {}).get('/**', {}).get('ros__parameters', {})
-        if flat.get('filter.model') in DOPPLER_MODELS:
+        name = 'alignment_filter_node'
+        sc = node_scenario(params_file_given(params, name), NODE_SCOPES[name])
+        if sc.filter.model in DOPPLER_MODELS:
             wait.append(f'{topics.DOPPLER_TWIST}=1')
     return play, wait
 

@@ -11,14 +11,14 @@ from alignment_core import pipeline
 from alignment_core.sensors.doppler_radar import DopplerStage
 from alignment_core.sensors.ldv import LdvStage
 from alignment_ros import convert, node_util, qos, topics
-from alignment_ros.params import ScenarioParameters
+from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 from alignment_ros.stamped_pairs import StampPairer
 
 
 class LdvNode(node_util.CountingNode):
     def __init__(self) -> None:
         super().__init__('ldv_node')
-        sc = self.sc = ScenarioParameters(self).scenario
+        sc = self.sc = ScenarioParameters(self, NODE_SCOPES['ldv_node']).scenario
         self.ldv = LdvStage(sc.ldv, sc.seed, pipeline.plane_of(sc), sc.rate_hz, sc.t0_ns)
         self.doppler = DopplerStage(sc.doppler, sc.seed, sc.rate_hz, sc.t0_ns) if sc.doppler.enabled else None
         self.stream_publisher(TwistWithCovarianceStamped, topics.LDV_TWIST)

@@ -12,7 +12,7 @@ from alignment_core import pipeline
 from alignment_core.sensors.master_ins import MasterInsStage
 from alignment_core.units import DEG
 from alignment_ros import convert, node_util, qos, topics
-from alignment_ros.params import ScenarioParameters
+from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
 FIX_RATE_HZ = 10.0
 
@@ -20,7 +20,7 @@ FIX_RATE_HZ = 10.0
 class MasterInsNode(node_util.CountingNode):
     def __init__(self) -> None:
         super().__init__('master_ins_node')
-        self.sc = ScenarioParameters(self).scenario
+        self.sc = ScenarioParameters(self, NODE_SCOPES['master_ins_node']).scenario
         m = self.sc.master
         self.stage = MasterInsStage(m, self.sc.seed, self.sc.ship.lat_deg * DEG, self.sc.rate_hz, self.sc.t0_ns)
         self.plane = pipeline.plane_of(self.sc)

@@ -13,7 +13,7 @@ from sensor_msgs.msg import NavSatFix
 from alignment_core import pipeline
 from alignment_core.validation import ConfigError
 from alignment_ros import convert, node_util, topics
-from alignment_ros.params import ScenarioParameters
+from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
 CHUNK = 25   # ship samples computed at once (0.25 s at 100 Hz)
 
@@ -33,7 +33,7 @@ class ShipMotionNode(node_util.CountingNode):
         self.add_on_set_parameters_callback(self._check)
         if self.get_parameter('real_time_factor').value < 0:
             raise ConfigError('real_time_factor must be >= 0')
-        self.sc = ScenarioParameters(self).scenario
+        self.sc = ScenarioParameters(self, NODE_SCOPES['ship_motion_node']).scenario
         self.source = pipeline.ship_source(self.sc)
         self.plane = pipeline.plane_of(self.sc)
         self.clock_pub = self.stream_publisher(Clock, topics.CLOCK)

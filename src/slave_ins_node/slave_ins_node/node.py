@@ -8,7 +8,7 @@ from sensor_msgs.msg import Imu
 
 from alignment_core import pipeline
 from alignment_ros import convert, node_util, qos, topics
-from alignment_ros.params import ScenarioParameters
+from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 from alignment_ros.stamped_pairs import StampPairer
 
 TRUTH_RATE_HZ = 10.0          # /truth/imu_bias: on the 10 Hz grid of the filter's outputs
@@ -17,7 +17,7 @@ TRUTH_RATE_HZ = 10.0          # /truth/imu_bias: on the 10 Hz grid of the filter
 class SlaveInsNode(node_util.CountingNode):
     def __init__(self) -> None:
         super().__init__('slave_ins_node')
-        self.sc = ScenarioParameters(self).scenario
+        self.sc = ScenarioParameters(self, NODE_SCOPES['slave_ins_node']).scenario
         self.stage = pipeline.SlaveImuStage(self.sc)
         imu = self.sc.imu
         self.gyro_var = imu.arw**2 * self.sc.rate_hz

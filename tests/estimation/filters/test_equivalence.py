@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from filter_problems import random_linear_problem, sqrt_psd
+from support.filter_problems import random_linear_problem, sqrt_psd
 
 from alignment_core.estimation.filters import (
     CarlsonFilter,

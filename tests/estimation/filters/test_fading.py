@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from filter_problems import random_linear_problem
+from support.filter_problems import random_linear_problem
 
 from alignment_core.estimation.filters import (
     CarlsonFilter,

@@ -15,7 +15,7 @@ trajectories coincide; differences are round-off only."""
 from __future__ import annotations
 
 import numpy as np
-from filter_problems import seed003_model, sqrt_psd
+from support.filter_problems import seed003_model, sqrt_psd
 
 from alignment_core.estimation.filters import CarlsonFilter, KalmanFilter, UDFilter
 

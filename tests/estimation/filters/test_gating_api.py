@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from filter_problems import random_linear_problem
 from scipy.stats import chi2
+from support.filter_problems import random_linear_problem
 
 from alignment_core.estimation.filters import (
     CarlsonFilter,

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from nav_error_reference import Point, context, error_rate, points
 from scipy.spatial.transform import Rotation
+from support.nav_error_reference import Point, context, error_rate, points
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
@@ -114,7 +114,7 @@ def calm_sea_large_yaw():
     # catapult scenario's own tuning is for the 15-state filter), and the launch taken at the first
     # LDV sample: a nonlinear model has no transition matrices for the delay-aware update, so the
     # two matches that wait for a 3-sample launch confirmation would meet the live error state
-    # (known limitation, transfer_alignment.py; it moves these filters' tilt by ~0.1')
+    # (known limitation, docs/engine.md; it moves these filters' tilt by ~0.1')
     ov = {'ship.sea_state': 0, 'duration_s': 10.0, 'aircraft.catapult.launch_time_s': 6.0,
           'aircraft.misalignment_arcmin': [15.0, -10.0, 600.0], 'filter.init_yaw_sigma_deg': 10.0,
           'filter.model': 'seed000_large_angle', 'filter.launch_accel_noise_mps2': 0.0,

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from nav_error_reference import expm_so3
 from scipy.spatial.transform import Rotation
+from support.nav_error_reference import expm_so3
 
 from alignment_core import pipeline
 from alignment_core.config import scenario

@@ -4,8 +4,8 @@ lever-arm states' columns, seed 001's Doppler velocity."""
 from __future__ import annotations
 
 import numpy as np
-from nav_error_reference import expm_so3, log_so3, skew
 from scipy.spatial.transform import Rotation
+from support.nav_error_reference import expm_so3, log_so3, skew
 
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.models import Corrections, Match
@@ -116,9 +116,3 @@ def test_seed001_doppler_h_against_the_radar_geometry():
 def test_skew_helper_is_the_cross_product():
     a, b = np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.7, -1.1])
     np.testing.assert_allclose(skew(a) @ b, np.cross(a, b))
-
-
-def test_scalar_rodrigues_is_the_rotation_of_its_vector():
-    from alignment_core.estimation.models.base import rotation_matrix
-    for v in (np.array([1e-3, -2e-3, 5e-3]), np.array([0.3, -1.2, 2.0]), np.array([1e-8, 0.0, -3e-9]), np.zeros(3)):
-        np.testing.assert_allclose(rotation_matrix(v), Rotation.from_rotvec(v).as_matrix(), rtol=0, atol=1e-15)

@@ -1,5 +1,5 @@
 """Each model's continuous F (and H) against numerical Jacobians of the exact nonlinear strapdown
-error propagation (nav_error_reference.py), at three dissimilar states; blocks that must
+error propagation (tests/support/nav_error_reference.py), at three dissimilar states; blocks that must
 coincide between models do; the discrete Phi is the documented second-order expansion.
 
 The velocity-matching models (vm12, seed000_6, seed002_10, seed003) neglect the errors of the
@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from nav_error_reference import Point, context, error_rate, jacobian, points
 from scipy.linalg import expm
+from support.nav_error_reference import Point, context, error_rate, jacobian, points
 
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.models import velocity_matching as vm

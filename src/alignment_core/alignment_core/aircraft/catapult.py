@@ -1,7 +1,7 @@
 """The catapult: hold-back tensioning, then the stroke's acceleration profile along the track.
 
 Distance s(t), speed s'(t) and acceleration s''(t) of the aircraft along the catapult track
-(the mounted aircraft x axis), relative to the deck; aircraft.py turns them into motion on the
+(the mounted aircraft x axis), relative to the deck; aircraft/kinematics.py turns them into motion on the
 rotating, heaving ship (with the Coriolis and centripetal terms).
 
 Stroke profiles (t = time since the launch, T = stroke_s, A = accel_g g):

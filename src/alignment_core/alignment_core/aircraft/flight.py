@@ -1,6 +1,6 @@
 """Post-launch flight: the aircraft flies a list of segments (level, climb, turn) from its
 catapult release state, in the local-level ENU frame with Earth rotation and transport rate
-(the IMU quantities follow from this truth exactly as on the deck; see aircraft.py).
+(the IMU quantities follow from this truth exactly as on the deck; see aircraft/kinematics.py).
 
 Kinematics. Ground velocity v = (V_h cos chi, V_h sin chi, v_U): horizontal speed V_h,
 vertical speed v_U and track chi (ROS yaw: from East, counter-clockwise). Each segment sets
@@ -47,20 +47,22 @@ import numpy as np
 
 from alignment_core.aircraft.flight_config import FlightConfig, FlightSegment
 from alignment_core.geometry import earth
-from alignment_core.geometry.rotations import quat_mul_batch, quat_to_dcm_batch, right_jacobian, rotvec_to_dcm_batch
+from alignment_core.geometry.rotations import (
+    axis_quat_batch,
+    quat_conj,
+    quat_mul,
+    quat_mul_batch,
+    quat_to_dcm_batch,
+    quat_to_rotvec,
+    right_jacobian,
+    rotvec_to_dcm_batch,
+    rotvec_to_quat_batch,
+)
 from alignment_core.units import DEG
 from alignment_core.validation import ConfigError
 
 GRID_S = 0.05                  # position integration step
 CHUNK_STEPS = 2000             # grid steps added at a time (100 s)
-
-
-
-
-
-
-
-
 
 
 def gravity_and_height_rate(lat: float, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -75,32 +77,6 @@ def _smooth(x):
     """S, S', S'' and int_0^x S of the quintic smoothstep (x clipped to [0, 1])."""
     return (x**3 * (10.0 - 15.0 * x + 6.0 * x * x), 30.0 * x * x * (1.0 - x) ** 2,
             60.0 * x * (1.0 - x) * (1.0 - 2.0 * x), x**4 * (2.5 - 3.0 * x + x * x))
-
-
-def _axis_quat(angle, axis: int) -> np.ndarray:
-    q = np.zeros(np.shape(angle) + (4,))
-    q[..., axis] = np.sin(0.5 * angle)
-    q[..., 3] = np.cos(0.5 * angle)
-    return q
-
-
-def _rotvec_quat(v: np.ndarray) -> np.ndarray:
-    """(x, y, z, w) quaternions of rotation vectors (..., 3), series near zero."""
-    a2 = np.sum(v * v, axis=-1)
-    small = a2 < 1e-12
-    a = np.sqrt(np.where(small, 1.0, a2))
-    s = np.where(small, 0.5 - a2 / 48.0, np.sin(0.5 * a) / a)
-    c = np.where(small, 1.0 - a2 / 8.0, np.cos(0.5 * a))
-    return np.concatenate([v * s[..., None], c[..., None]], axis=-1)
-
-
-def _quat_rotvec(q: np.ndarray) -> np.ndarray:
-    """Rotation vector of one (x, y, z, w) quaternion."""
-    q = q if q[3] >= 0.0 else -q
-    s = math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2)
-    if s < 1e-15:
-        return 2.0 * q[:3]
-    return q[:3] * (2.0 * math.atan2(s, q[3]) / s)
 
 
 @dataclass
@@ -141,9 +117,7 @@ class FlightPath:
         self._schedule(cfg.parsed(), vh0, float(v[2]), math.atan2(v[1], v[0]))
         # attitude blend from the deck attitude at the release
         m = self._model(np.zeros(1))
-        q_m0 = m['q'][0]
-        q_inv = np.array([-q_m0[0], -q_m0[1], -q_m0[2], q_m0[3]])
-        self.delta0 = _quat_rotvec(quat_mul_batch(q_inv, np.asarray(q_rel, dtype=float)))
+        self.delta0 = quat_to_rotvec(quat_mul(quat_conj(m['q'][0]), np.asarray(q_rel, dtype=float)))
         e0 = rotvec_to_dcm_batch(self.delta0)
         self.delta_rate0 = np.linalg.solve(right_jacobian(self.delta0), np.asarray(w_rel, dtype=float)
                                            - e0.T @ m['w'][0])
@@ -237,8 +211,8 @@ class FlightPath:
         Dd = Vd * gd + V * gdd + dgdh * vu * cg - g * sg * gd
         mu = np.arctan2(N, D)
         mud = (D * Nd - N * Dd) / (N * N + D * D)
-        q = quat_mul_batch(quat_mul_batch(_axis_quat(chi, 2), _axis_quat(-gam, 1)),
-                           quat_mul_batch(_axis_quat(mu, 0), _axis_quat(np.full_like(mu, -self.alpha), 1)))
+        q = quat_mul_batch(quat_mul_batch(axis_quat_batch(chi, 2), axis_quat_batch(-gam, 1)),
+                           quat_mul_batch(axis_quat_batch(mu, 0), axis_quat_batch(np.full_like(mu, -self.alpha), 1)))
         # body rate: chi' about the nav z, -gamma' about the velocity-axes y, mu' about x, then alpha
         a0, a1, a2 = w * sg, -gd, w * cg
         cm, sm = np.cos(mu), np.sin(mu)
@@ -314,7 +288,7 @@ class FlightPath:
         ts = self.cfg.settle_s
         delta = self.delta0 * (1.0 - S) + ts * self.delta_rate0 * h1
         delta_d = -self.delta0 * S1 / ts + self.delta_rate0 * h1d
-        q = quat_mul_batch(m['q'], _rotvec_quat(delta))
+        q = quat_mul_batch(m['q'], rotvec_to_quat_batch(delta))
         c_na = quat_to_dcm_batch(q)
         e = rotvec_to_dcm_batch(delta)
         w_na = (np.einsum('...ji,...j->...i', e, m['w'])

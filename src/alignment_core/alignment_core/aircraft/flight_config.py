@@ -94,7 +94,7 @@ def _check_segment(seg: FlightSegment, where: str, last: bool) -> None:
 @dataclass(frozen=True)
 class FlightConfig:
     """Flight after the catapult release. `segments` '' keeps the original free flight (the
-    release velocity and attitude held constant); otherwise a segment list (flight_profile.py).
+    release velocity and attitude held constant); otherwise a segment list (aircraft/flight.py).
     `transition_s`: default blend time of each segment's changes (roll-in/out, speed, climb);
     `settle_s`: time to rotate from the deck attitude into the flight attitude after the
     release; `alpha_deg`: angle of attack (body x above the velocity vector)."""

@@ -7,7 +7,7 @@ angled deck's waist catapults are about -9 deg) and then by a mounting misalignm
 aircraft's x axis, u = C_a^s e_x; on it the aircraft moves r(t) = r0 + s(t) u (catapult.py:
 hold-back creep, then the stroke's acceleration profile). After the release it either keeps
 its release velocity and attitude (constant in the nav frame; `aircraft.flight.segments` '')
-or flies a segment list (flight_profile.py: climbs, turns, with Earth rate and transport rate).
+or flies a segment list (aircraft/flight.py: climbs, turns, with Earth rate and transport rate).
 
 Ideal increments are integrals over each sample interval of omega_ib^a and f^a evaluated by
 3-point Gauss-Legendre quadrature on the ship state, which is interpolated inside the
@@ -92,7 +92,7 @@ class AircraftConfig:
 
 class AircraftKinematics:
     """Relative motion on the deck, release state and ideal IMU increments. With flight
-    segments, `path` (flight_profile.FlightPath, set when the release sample is seen) gives
+    segments, `path` (flight.FlightPath, set when the release sample is seen) gives
     the flight truth at any time after the release: `path.state(tau)`."""
 
     def __init__(self, cfg: AircraftConfig, plane: earth.TangentPlane, rate_hz: float,

@@ -1,19 +1,24 @@
 """Scenario files: one validated configuration drives both the node graph and the batch
 pipeline. Unknown keys, wrong types and out-of-range values fail with the dotted key named.
+
+`resolve` is the one way from what a user gave (a scenario file with --set overrides, or a
+node's parameters) to a Scenario: overrides, presets and defaulting rules (config/given.py),
+then validation; a node passes its scope and gets the checks its keys allow.
 """
 from __future__ import annotations
 
-import copy
+import dataclasses
 import os
+import typing
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 
-from alignment_core.aircraft.catapult import track_length_from_dict
 from alignment_core.aircraft.kinematics import AircraftConfig, check_catapult_grid
+from alignment_core.config.given import Scope, fill_defaults, with_overrides, within
 from alignment_core.estimation.config import FilterConfig
-from alignment_core.sensors import presets as sensor_presets
 from alignment_core.sensors.doppler_radar import DopplerConfig
 from alignment_core.sensors.imu import ImuConfig
 from alignment_core.sensors.ldv import LdvConfig
@@ -40,24 +45,36 @@ class Scenario:
     doppler: DopplerConfig = field(default_factory=DopplerConfig)
     filter: FilterConfig = field(default_factory=FilterConfig)
 
-    def validate(self) -> None:
-        require(0 <= self.seed < 2**63, f"seed must be a non-negative integer, got {self.seed}")
-        require(0.0 < self.duration_s <= 86400.0, f"duration_s must be in (0, 86400], got {self.duration_s}")
-        require(1.0 <= self.rate_hz <= 2000.0, f"rate_hz must be in [1, 2000], got {self.rate_hz}")
-        require(abs(1e9 / self.rate_hz - round(1e9 / self.rate_hz)) < 1e-6,
-                f"rate_hz = {self.rate_hz} must give an integer number of nanoseconds per sample")
-        require(self.start_time_s > 0.0, f"start_time_s must be > 0 (0 means 'no clock' in ROS), "
-                                         f"got {self.start_time_s}")
-        require(abs(self.duration_s * self.rate_hz - round(self.duration_s * self.rate_hz)) < 1e-6,
-                "duration_s must be a whole number of samples")
-        if self.aircraft.catapult.enabled:
+    def validate(self, covers: Callable[[str], bool] = lambda key: True) -> None:
+        """Ranges and consistency. `covers` (a node's scope) limits the checks to those whose
+        keys it takes; the others are for the nodes that take their keys."""
+        def given(*keys: str) -> bool:
+            return all(covers(k) for k in keys)
+        if given('seed'):
+            require(0 <= self.seed < 2**63, f"seed must be a non-negative integer, got {self.seed}")
+        if given('duration_s'):
+            require(0.0 < self.duration_s <= 86400.0, f"duration_s must be in (0, 86400], got {self.duration_s}")
+        if given('rate_hz'):
+            require(1.0 <= self.rate_hz <= 2000.0, f"rate_hz must be in [1, 2000], got {self.rate_hz}")
+            require(abs(1e9 / self.rate_hz - round(1e9 / self.rate_hz)) < 1e-6,
+                    f"rate_hz = {self.rate_hz} must give an integer number of nanoseconds per sample")
+        if given('start_time_s'):
+            require(self.start_time_s > 0.0, f"start_time_s must be > 0 (0 means 'no clock' in ROS), "
+                                             f"got {self.start_time_s}")
+        if given('duration_s', 'rate_hz'):
+            require(abs(self.duration_s * self.rate_hz - round(self.duration_s * self.rate_hz)) < 1e-6,
+                    "duration_s must be a whole number of samples")
+        if self.aircraft.catapult.enabled and given('aircraft.catapult', 'rate_hz'):
             check_catapult_grid(self.aircraft.catapult, self.rate_hz)
-        check_rate('master.rate_hz', self.master.rate_hz, self.rate_hz)
-        check_rate('ldv.rate_hz', self.ldv.rate_hz, self.rate_hz)
-        if self.doppler.enabled:
+        if given('master.rate_hz', 'rate_hz'):
+            check_rate('master.rate_hz', self.master.rate_hz, self.rate_hz)
+        if given('ldv.rate_hz', 'rate_hz'):
+            check_rate('ldv.rate_hz', self.ldv.rate_hz, self.rate_hz)
+        if self.doppler.enabled and given('doppler.rate_hz', 'rate_hz'):
             check_rate('doppler.rate_hz', self.doppler.rate_hz, self.rate_hz)
-        require(self.doppler.enabled or self.filter.model != 'seed001_13',
-                "filter.model seed001_13 matches the Doppler radar: set doppler.enabled true")
+        if given('doppler.enabled', 'filter.model'):
+            require(self.doppler.enabled or self.filter.model != 'seed001_13',
+                    "filter.model seed001_13 matches the Doppler radar: set doppler.enabled true")
 
     @property
     def dt_ns(self) -> int:
@@ -96,17 +113,6 @@ def scenario_path(name_or_path: str) -> Path:
     raise ConfigError(f"unknown scenario {name_or_path!r} (available: {', '.join(avail)})")
 
 
-def _set_dotted(d: dict, key: str, value) -> None:
-    parts = key.split('.')
-    cur = d
-    for p in parts[:-1]:
-        nxt = cur.setdefault(p, {})
-        if not isinstance(nxt, dict):
-            raise ConfigError(f"--set {key}: {p} is not a section")
-        cur = nxt
-    cur[parts[-1]] = value
-
-
 def parse_overrides(items: list[str] | tuple[str, ...]) -> dict[str, object]:
     """['ship.sea_state=6', ...] -> {'ship.sea_state': 6}; values parsed as YAML scalars."""
     out = {}
@@ -118,40 +124,45 @@ def parse_overrides(items: list[str] | tuple[str, ...]) -> dict[str, object]:
     return out
 
 
+def resolve(given: dict | None, overrides: dict[str, object] | None = None,
+            scope: Scope | None = None) -> Scenario:
+    """The scenario `given` (nested) and the dotted `overrides` define: presets and the
+    defaulting rules fill the keys not given (given.fill_defaults), then it is validated.
+    With a scope (a node's keys), keys outside it are dropped after the rules, so they keep
+    their defaults, and only the checks the scope allows run (Scenario.validate)."""
+    data = fill_defaults(with_overrides(given, overrides))
+    if scope is None:
+        return build(Scenario, data)
+    return _build_within(within(data, scope), scope)
+
+
+_HINTS = typing.get_type_hints(Scenario)
+_SECTIONS = {f.name for f in dataclasses.fields(Scenario) if dataclasses.is_dataclass(_HINTS[f.name])}
+_TopLevel = dataclasses.make_dataclass('TopLevel', [
+    (f.name, _HINTS[f.name], dataclasses.field(default=f.default))
+    for f in dataclasses.fields(Scenario) if f.name not in _SECTIONS])
+"""The scenario's own keys (seed, rate_hz, ...), typed as in Scenario, checked by `build`."""
+
+
+def _build_within(data: dict, scope: Scope) -> Scenario:
+    """Each section built (type- and range-checked) on its own, then the scenario's checks
+    that `scope` allows."""
+    parts = {name: build(_HINTS[name], data.pop(name), name) for name in list(data) if name in _SECTIONS}
+    top = build(_TopLevel, data)
+    sc = Scenario(**{f.name: getattr(top, f.name) for f in dataclasses.fields(top)}, **parts)
+    sc.validate(scope.covers)
+    return sc
+
+
 def from_dict(data: dict, overrides: dict[str, object] | None = None) -> Scenario:
-    data = copy.deepcopy(data) if data else {}
-    for k, v in (overrides or {}).items():
-        _set_dotted(data, k, v)
-    sensor_presets.apply(data)           # imu.preset / master.preset fill the keys not given
-    # the filter and the LDV know the surveyed deck spot unless told otherwise; the LDV
-    # beam covers the catapult track (hold-back creep + stroke length + 0.5 m), so matching ends at the release
-    ac = data.get('aircraft') or {}
-    if 'lever_arm_m' in ac:
-        data.setdefault('filter', {})
-        if data['filter'] is None:
-            data['filter'] = {}
-        data['filter'].setdefault('lever_arm_m', ac['lever_arm_m'])
-        data.setdefault('ldv', {})
-        if data['ldv'] is None:
-            data['ldv'] = {}
-        data['ldv'].setdefault('origin_m', ac['lever_arm_m'])
-    if 'heading_on_deck_deg' in ac:      # the nominal mounting on deck, and the LDV beam along the track
-        for sec, key in (('filter', 'heading_on_deck_deg'), ('ldv', 'track_heading_deg')):
-            if data.get(sec) is None:
-                data[sec] = {}
-            data[sec].setdefault(key, ac['heading_on_deck_deg'])
-    cat = ac.get('catapult') or {}
-    if cat.get('enabled', True):
-        data.setdefault('ldv', {})
-        if data['ldv'] is None:
-            data['ldv'] = {}
-        data['ldv'].setdefault('track_length_m', track_length_from_dict(cat) + 0.5)
-    return build(Scenario, data)
+    """The complete scenario of a nested mapping with dotted overrides (see `resolve`)."""
+    return resolve(data, overrides)
 
 
-def load(name_or_path: str, overrides: dict[str, object] | None = None,
-         seed: int | None = None) -> Scenario:
-    """Load a scenario by name (config/scenarios/NAME.yaml) or path, apply dotted overrides."""
+def given_data(name_or_path: str, overrides: dict[str, object] | None = None,
+               seed: int | None = None) -> dict:
+    """What a scenario file and its overrides give, before presets and defaults (nested):
+    `resolve` of it is `load`'s scenario; run_graph gives it to the nodes as parameters."""
     path = scenario_path(name_or_path)
     try:
         data = yaml.safe_load(path.read_text()) or {}
@@ -162,13 +173,14 @@ def load(name_or_path: str, overrides: dict[str, object] | None = None,
     ov = dict(overrides or {})
     if seed is not None:
         ov['seed'] = seed
-    return from_dict(data, ov)
+    return with_overrides(data, ov)
+
+
+def load(name_or_path: str, overrides: dict[str, object] | None = None,
+         seed: int | None = None) -> Scenario:
+    """Load a scenario by name (config/scenarios/NAME.yaml) or path, apply dotted overrides."""
+    return resolve(given_data(name_or_path, overrides, seed))
 
 
 def dump(sc: Scenario) -> str:
     return yaml.safe_dump(to_dict(sc), sort_keys=False)
-
-
-def build_scenario(data: dict) -> Scenario:
-    """Validate a complete nested dict (no defaulting of the filter's lever arm)."""
-    return build(Scenario, data)

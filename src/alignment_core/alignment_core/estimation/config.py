@@ -1,25 +1,17 @@
-"""The alignment filter's configuration (`filter.*`) and its validation."""
+"""The alignment filter's configuration (`filter.*`) and its validation: each value's range, and
+the model x algorithm x option combinations the engine can run (docs/engine.md)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Literal
 
-from alignment_core.estimation.models import (
-    DOPPLER_MODELS,
-    NONLINEAR_MODELS,
-)
+from alignment_core.estimation.models import DOPPLER_MODELS, NONLINEAR_MODELS
 from alignment_core.validation import require
 
 LINEAR_ALGORITHMS = ('kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud', 'combined')
-
-
 NONLINEAR_ALGORITHMS = ('ekf', 'ukf', 'ckf')
-
-
-ATTITUDE_MODELS = ('seed003_21', 'seed003_24')           # attitude-match rows and mounting states
-
-
-RATE_MODELS = ('vm12', 'vm15', 'seed003_21', 'seed003_24')  # phi and eps states: rate matching
+ATTITUDE_MODELS = ('seed003_21', 'seed003_24')               # attitude-match rows and mounting states
+RATE_MODELS = ('vm12', 'vm15', 'seed003_21', 'seed003_24')   # phi and eps states: rate matching
 
 
 @dataclass(frozen=True)
@@ -120,7 +112,7 @@ class FilterConfig:
         self.validate_combination()
 
     def validate_combination(self) -> None:
-        """Model x algorithm x options (the matrix in the module docstring)."""
+        """Model x algorithm x options (the matrix in docs/engine.md)."""
         m, a = self.model, self.algorithm
         require(not (m in DOPPLER_MODELS and a in ('stf', 'stf_multiple')),
                 f"algorithm {a} cannot run {m}: its innovation recursion would mix the LDV and Doppler "

@@ -1,6 +1,8 @@
 """The filter algorithm named by `filter.algorithm`, built for a model."""
 from __future__ import annotations
 
+from typing import Any, Protocol
+
 import numpy as np
 
 from alignment_core.estimation.config import FilterConfig
@@ -15,14 +17,29 @@ from alignment_core.estimation.filters import (
     UDFilter,
     UnscentedKalmanFilter,
 )
+from alignment_core.estimation.filters.base import UpdateResult
 
 
-def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray, kinds: tuple[int, ...] | None = None):
+class EngineFilter(Protocol):
+    """What the engine uses of a filter (filters/base.py): x and P it may assign (closed-loop
+    feedback, known-event noise), predict, update and diagnostics."""
+    x: np.ndarray
+    P: np.ndarray
+
+    def predict(self, phi: np.ndarray, qd: np.ndarray) -> None: ...
+
+    def update(self, z: np.ndarray, h: np.ndarray, r: np.ndarray,
+               gate_chi2: float | None = None) -> UpdateResult: ...
+
+    def diagnostics(self) -> dict[str, Any]: ...
+
+
+def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray, kinds: tuple[int, ...]) -> EngineFilter:
     """The filter named by cfg.algorithm (alignment_core.filters), in float32 if asked.
 
     stf_alpha gives the multiple-factor STF's alpha per kind of state (phi, dV, eps, nabla,
     other: phi_m, mounting, flexure, lever arm): which blocks may change faster than the model
-    says. `kinds` (the model's, one per state) maps them; default: blocks of three in that order."""
+    says. `kinds` (the model's, one per state) maps them."""
     dtype = np.float32 if cfg.float32 else np.float64
     a = cfg.algorithm
     if a == 'kf':
@@ -31,10 +48,7 @@ def make_filter(cfg: FilterConfig, x0: np.ndarray, p0: np.ndarray, kinds: tuple[
         return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, lam_max=cfg.stf_lambda_max,
                                     dtype=dtype)
     if a == 'stf_multiple':
-        if kinds is None:
-            alpha = np.repeat(np.asarray(cfg.stf_alpha), 3)[:len(x0)]
-        else:
-            alpha = np.asarray(cfg.stf_alpha)[np.asarray(kinds)]
+        alpha = np.asarray(cfg.stf_alpha)[np.asarray(kinds)]
         return StrongTrackingFilter(x0, p0, rho=cfg.stf_rho, beta=cfg.stf_beta, alpha=alpha,
                                     lam_max=cfg.stf_lambda_max, dtype=dtype)
     if a == 'fading':

@@ -1,7 +1,9 @@
-"""What the alignment engine publishes: one estimate per output instant, and its counters."""
+"""What the alignment engine publishes: one estimate per output instant, its counters, its
+diagnostics and what it knows of the aircraft's motion on the deck (docs/engine.md)."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -27,6 +29,7 @@ class Estimate:
 
 @dataclass
 class Counters:
+    """Samples seen, rejected and matched, and the events the engine counts, since the start."""
     imu: int = 0
     ldv: int = 0
     master: int = 0
@@ -43,4 +46,25 @@ class Counters:
     numerical_failures: int = 0       # breakdowns of the filter (non-finite or non-PD covariance)
     creep_detected: int = 0           # slow deck motion seen before the launch (LDV in the reference from then)
     rate_unmatched: int = 0           # rate matching: matches without a gyro interval / master pair to compare
-    extra: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Diagnostics:
+    """The engine's state for /diagnostics: the filter's own diagnostics as of the last output
+    (nis, updates, gated, predicts, fading factor(s) if it fades; empty before the first), its
+    health, the reason it stopped, and the samples queued but not yet processed."""
+    filter: dict[str, Any]
+    healthy: bool
+    failure: str                      # '' while healthy
+    pending: int
+
+
+@dataclass(frozen=True)
+class DeckMotion:
+    """The aircraft's motion on the deck as the LDV showed it: moving (creep or launch) from
+    t_moving_ns, launched at t_launch_ns (validity times, None: not yet), and the deck
+    displacement integrated from the LDV since it moved (ship axes, m)."""
+    moving: bool
+    t_moving_ns: int | None
+    t_launch_ns: int | None
+    displacement: np.ndarray          # (3,)

@@ -133,10 +133,3 @@ def local_terms(lat: float, h: float, v_e: float, v_n: float
     g = g0 * (1.0 - 2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) * h + 3.0 / A**2 * h * h)
     return (r_m, r_n, OMEGA_IE * cl, OMEGA_IE * sl,
             -v_n / (r_m + h), v_e / (r_n + h), v_e * (sl / cl) / (r_n + h), g)
-
-
-def local_scalar(lat: float, h: float, v_n: np.ndarray
-                 ) -> tuple[float, float, np.ndarray, np.ndarray, float]:
-    """(R_M, R_N, omega_ie^n, omega_en^n, |g|) for one point, the rates as (3,) arrays."""
-    r_m, r_n, wie_n, wie_u, wen_e, wen_n, wen_u, g = local_terms(lat, h, float(v_n[0]), float(v_n[1]))
-    return r_m, r_n, np.array([0.0, wie_n, wie_u]), np.array([wen_e, wen_n, wen_u]), g

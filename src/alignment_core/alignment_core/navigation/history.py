@@ -1,6 +1,6 @@
 """Time-of-validity bookkeeping for the alignment filter: a short history of the slave solution
 and of the LDV stream, so that master data valid at t_v = stamp - latency are compared with the
-slave solution and the deck velocity at that same t_v (sensor_timing.py stamps data valid at t
+slave solution and the deck velocity at that same t_v (sensors/timing.py stamps data valid at t
 as t + latency).
 
 Slave history: the strapdown solution at each IMU step before the latest one (the latest is the
@@ -11,7 +11,7 @@ correction (a nav-frame rotation, a velocity and a position change) to the store
 so a later match against the past is not corrected twice. `transition_since(t_v)` is the
 product of the Phi from t_v to the live state (a step cut by t_v contributes
 I + f (Phi - I), f the fraction of the step after t_v): the engine's delay-aware measurement
-matrix is H Phi^-1 (transfer_alignment.py).
+matrix is H Phi^-1 (docs/engine.md).
 
 LDV history: each sample by validity time, with the launch flag (`moving`) and the deck
 displacement integrated up to it (trapezoids, as the engine integrates). At a time between
@@ -29,18 +29,6 @@ import numpy as np
 
 from alignment_core.geometry.rotations import floats, normalized_f, quat_mul_f, slerp
 from alignment_core.navigation.strapdown import NavState
-
-# The helpers work in float arithmetic on the quaternions' components (strapdown.py: a numpy
-# operation on a 4-vector costs ~30 times a float operation) and return arrays.
-
-
-
-
-
-
-
-
-
 
 _EYES: dict[int, np.ndarray] = {}
 
@@ -88,9 +76,6 @@ class SlaveHistory:
         it = self.items
         while it and it[0].t_ns < keep_from_ns and (it[1].t_ns if len(it) > 1 else t_live_ns) <= keep_from_ns:
             it.popleft()
-
-    def oldest_ns(self) -> int | None:
-        return self.items[0].t_ns if self.items else None
 
     def state_at(self, t_ns: int, live: NavState, t_live_ns: int, max_step_ns: int
                  ) -> tuple[NavState, np.ndarray | None] | None:

@@ -37,12 +37,13 @@ class StampMerger:
 
     def watermark(self) -> int | None:
         """The least recent stamp of all streams (None until every stream has delivered)."""
-        return None if self._silent else min(self.last.values())
+        return None if self._silent else min(t for t in self.last.values() if t is not None)
 
     def pop_ready(self) -> list[Event]:
         """(stream, stamp, item) of every queued event up to the watermark, in order."""
         wm = self.watermark()
-        heap, out = self.heap, []
+        heap = self.heap
+        out: list[Event] = []
         if wm is None:
             return out
         pop = heapq.heappop

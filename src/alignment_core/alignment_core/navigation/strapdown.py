@@ -25,27 +25,8 @@ from alignment_core.geometry.rotations import (
 )
 
 # Speed: the per-step work is on 3-vectors and quaternions, where one numpy operation costs
-# ~1 us of call overhead against ~30 ns for a Python float operation. The helpers below work on
-# plain floats (tuples/lists); arrays are built only for what callers keep or use as arrays.
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
+# ~1 us of call overhead against ~30 ns for a Python float operation: the update works on plain
+# floats (the float forms of geometry/rotations.py) and builds arrays only for what callers keep.
 
 
 @dataclass
@@ -100,20 +81,20 @@ class Strapdown:
         by = dvl[1] + 0.5 * rot[1] + rr[1] / 6.0 + (s1[1] + s2[1]) / 12.0
         bz = dvl[2] + 0.5 * rot[2] + rr[2] / 6.0 + (s1[2] + s2[2]) / 12.0
         q0 = floats(s.q_nb)
-        c = quat_to_dcm_f(q0)
-        self.c_start = np.array(c).reshape(3, 3)
+        cnb = quat_to_dcm_f(q0)
+        self.c_start = np.array(cnb).reshape(3, 3)
         # dv_sf = C_b^n(start) dv_b
-        fx = c[0] * bx + c[1] * by + c[2] * bz
-        fy = c[3] * bx + c[4] * by + c[5] * bz
-        fz = c[6] * bx + c[7] * by + c[8] * bz
+        fx = cnb[0] * bx + cnb[1] * by + cnb[2] * bz
+        fy = cnb[3] * bx + cnb[4] * by + cnb[5] * bz
+        fz = cnb[6] * bx + cnb[7] * by + cnb[8] * bz
         v0x, v0y, v0z = floats(s.v_n)
         lat0, h0 = s.lat, s.h
         # predictor at the start of the interval: v1 = v0 + dv_sf + (g^n - (2 w_ie + w_en) x v0) h
         r_m, r_n, ien, ieu, ene, enn, enu, g = earth.local_terms(lat0, h0, v0x, v0y)
-        wx, wy, wz = ene, 2.0 * ien + enn, 2.0 * ieu + enu
-        v1x = v0x + fx + (0.0 - (wy * v0z - wz * v0y)) * h
-        v1y = v0y + fy + (0.0 - (wz * v0x - wx * v0z)) * h
-        v1z = v0z + fz + (-g - (wx * v0y - wy * v0x)) * h
+        cor = cross_f((ene, 2.0 * ien + enn, 2.0 * ieu + enu), (v0x, v0y, v0z))
+        v1x = v0x + fx + (0.0 - cor[0]) * h
+        v1y = v0y + fy + (0.0 - cor[1]) * h
+        v1z = v0z + fz + (-g - cor[2]) * h
         vmx, vmy, vmz = 0.5 * (v0x + v1x), 0.5 * (v0y + v1y), 0.5 * (v0z + v1z)
         lat_m = lat0 + 0.5 * h * vmy / (r_m + h0)
         h_m = h0 + 0.5 * h * vmz
@@ -123,13 +104,12 @@ class Strapdown:
         self.w_en = np.array([ene, enn, enu])
         # nav-frame rotation zeta = (w_ie + w_en) h; dv_n = dv_sf - zeta x dv_sf / 2
         zx, zy, zz = ene * h, (ien + enn) * h, (ieu + enu) * h
-        dnx = fx - 0.5 * (zy * fz - zz * fy)
-        dny = fy - 0.5 * (zz * fx - zx * fz)
-        dnz = fz - 0.5 * (zx * fy - zy * fx)
-        wx, wy, wz = ene, 2.0 * ien + enn, 2.0 * ieu + enu
-        vx = v0x + dnx + (0.0 - (wy * vmz - wz * vmy)) * h
-        vy = v0y + dny + (0.0 - (wz * vmx - wx * vmz)) * h
-        vz = v0z + dnz + (-g - (wx * vmy - wy * vmx)) * h
+        zf = cross_f((zx, zy, zz), (fx, fy, fz))
+        dnx, dny, dnz = fx - 0.5 * zf[0], fy - 0.5 * zf[1], fz - 0.5 * zf[2]
+        cor = cross_f((ene, 2.0 * ien + enn, 2.0 * ieu + enu), (vmx, vmy, vmz))
+        vx = v0x + dnx + (0.0 - cor[0]) * h
+        vy = v0y + dny + (0.0 - cor[1]) * h
+        vz = v0z + dnz + (-g - cor[2]) * h
         vmx, vmy, vmz = 0.5 * (v0x + vx), 0.5 * (v0y + vy), 0.5 * (v0z + vz)
         s.lat = lat0 + h * vmy / (r_m + h_m)
         s.lon = s.lon + h * vmx / ((r_n + h_m) * math.cos(lat_m))

@@ -10,7 +10,7 @@ noise (stream 'doppler_noise'):
     v_meas = (s' cos D', s' sin D', (1 + k) u_z) + n,   n ~ N(0, sigma^2 I),
     sigma = noise_mps + noise_per_speed |v_b|    (speed-dependent noise)
 As constants, the azimuth boresight and the drift-angle error act alike in level flight; they
-differ once the aircraft banks or climbs. Own rate and latency: sensor_timing.
+differ once the aircraft banks or climbs. Own rate and latency: sensors/timing.py.
 """
 from __future__ import annotations
 

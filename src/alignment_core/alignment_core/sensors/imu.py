@@ -1,6 +1,6 @@
 """Slave IMU error model: what the aircraft's strapdown IMU adds to the ideal increments.
 
-Per interval (t_{k-1}, t_k] of length h, with ideal increments (dtheta, dv) from aircraft.py:
+Per interval (t_{k-1}, t_k] of length h, with ideal increments (dtheta, dv) from aircraft/kinematics.py:
     dtheta_out = Q_a[ (I + S_g) dtheta + (b_g + b_gm + b_rw) h + G dv + arw sqrt(h) n ]
     dv_out     = Q_v[ (I + S_a) dv     + (b_a + b_am + b_arw) h      + vrw sqrt(h) n ]
 and the output is increment / interval (mean rate, mean specific force).
@@ -34,7 +34,7 @@ from alignment_core.validation import require
 @dataclass(frozen=True)
 class ImuConfig:
     """Slave IMU grade (defaults: seed 000's slave, 0.01 deg/h and 100 ug, 1-sigma per axis).
-    `preset` names a grade in sensor_presets.IMU_PRESETS; it fills the keys a scenario does
+    `preset` names a grade in sensors/presets.py IMU_PRESETS; it fills the keys a scenario does
     not give (resolved when the scenario is loaded; explicit keys win)."""
     preset: str = ''
     gyro_bias_dph: float = 0.01

@@ -7,7 +7,7 @@ along the catapult track (at `track_heading_deg` from the bow), farther than max
 the LDV head, faster than max_speed_mps relative to the deck, or in a dropout. Dropouts: a two-state Markov process,
 starts at rate dropout_rate_hz (per second of valid time), exponential durations of mean
 dropout_mean_s; fraction of time in dropout p = r d / (1 + r d); stepped exactly between
-samples (stream 'ldv_dropout', stationary start). Own rate and latency: sensor_timing.
+samples (stream 'ldv_dropout', stationary start). Own rate and latency: sensors/timing.py.
 Everything is off by default (today's numbers).
 """
 from __future__ import annotations

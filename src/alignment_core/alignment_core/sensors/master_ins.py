@@ -30,7 +30,7 @@ error does not enter transfer alignment). Two models (`master.model`):
   by the augmented expm, process noise by Van Loan (stream stage_rng(seed, 'master_ins_process')).
 
 Both models add white velocity noise and the gyro bias on the body rate (stream 'master_ins').
-Output rate and latency: sensor_timing (`rate_hz`, 0 = scenario rate; `latency_s`).
+Output rate and latency: sensors/timing.py (`rate_hz`, 0 = scenario rate; `latency_s`).
 """
 from __future__ import annotations
 

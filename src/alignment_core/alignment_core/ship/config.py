@@ -12,7 +12,7 @@ PAPER_TABLE3_DEG = {3: (1.25, 1.01, 1.03), 4: (2.71, 1.71, 1.92), 5: (5.62, 2.91
                     6: (7.47, 3.15, 4.15), 7: (9.84, 5.27, 6.11)}
 
 
-# periods (s) roll, pitch, yaw, heave for a 175 m ship (ship-motion.md); 1-2 and 8-9 extend
+# periods (s) roll, pitch, yaw, heave for a 175 m ship (docs/ship-motion.md); 1-2 and 8-9 extend
 # its ranges (roll at the natural period, pitch/heave/yaw lengthening with the wave period)
 PAPER_PERIOD_S = {1: (17.0, 6.0, 7.5, 6.5), 2: (17.0, 6.25, 7.75, 6.75),
                   3: (17.0, 6.5, 8.0, 7.0), 4: (17.0, 7.0, 8.5, 7.5), 5: (17.0, 7.5, 9.0, 8.0),

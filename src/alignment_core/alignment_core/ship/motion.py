@@ -7,7 +7,7 @@ from alignment_core.validation import ConfigError
 
 
 def make_motion(cfg: ShipConfig, seed: int):
-    """The ship model for `cfg.mode`: PaperShipMotion or ship_waves.SpectralShipMotion."""
+    """The ship model for `cfg.mode`: PaperShipMotion or spectral.SpectralShipMotion."""
     if cfg.mode == 'paper':
         return PaperShipMotion(cfg, seed)
     if cfg.mode == 'spectral':

@@ -1,13 +1,13 @@
 """Ship six-DOF truth at the master INS point.
 
-Two modes (`ShipConfig.mode`): 'paper' (below) and 'spectral' (`ship_waves.py`: a random
+Two modes (`ShipConfig.mode`): 'paper' (below) and 'spectral' (`ship/spectral.py`: a random
 sea through response amplitude operators on a straight course; see that module).
 `make_motion(cfg, seed)` builds either.
 
 Paper mode (seed 002, eq 18): one sinusoid per attitude axis plus heave, on a straight
 course at constant speed. Amplitudes are the paper's Table 3 (sea states 3-7); the paper
 gives no periods, so roll sits at the natural roll period and pitch, heave and yaw at the
-encounter period of a 175 m ship (`ship-motion.md`); phases are random per axis. Heave
+encounter period of a 175 m ship (docs/ship-motion.md); phases are random per axis. Heave
 amplitude is half the sea state's mean significant wave height (a regular wave of that
 height, heave RAO ~ 1 at these periods).
 

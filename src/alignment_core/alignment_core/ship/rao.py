@@ -47,7 +47,7 @@ MSS_TO_ROS = np.array([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
 
 @dataclass(frozen=True)
 class CarrierParams:
-    """A ~310 m aircraft carrier (ship-motion.md defaults)."""
+    """A ~310 m aircraft carrier (defaults: docs/ship-motion.md)."""
     lpp: float = 310.0
     beam: float = 40.5                  # waterline beam, m
     draft: float = 11.3

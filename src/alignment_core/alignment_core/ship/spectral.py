@@ -21,7 +21,7 @@ increments) are
 derivatives multiply H~ by (i w_e) and (-w_e^2): exact, analytic.
 
 Truth at the master INS point: Euler (roll, pitch, yaw) = (x4, x5, psi_LF + x6); body rate
-and angular acceleration through attitude.euler_rates_to_body_rate / euler_acc_to_body_acc;
+and angular acceleration through geometry.euler.euler_rates_to_body_rate / euler_acc_to_body_acc;
 ENU velocity v_LF + Rz(psi_LF) (x1', x2', x3') and its exact derivative; position on the
 ellipsoid with the wave-frequency displacement added (heave as height).
 
@@ -42,7 +42,7 @@ from alignment_core.rng import stage_rng
 from alignment_core.samples import ShipSample
 from alignment_core.ship import rao, sea_state, wave_spectrum
 from alignment_core.ship.config import ShipConfig
-from alignment_core.ship.manoeuvring.course_keeping import _poly, _quintic
+from alignment_core.ship.manoeuvring.course_keeping import quintic_coefficients, quintic_values
 from alignment_core.units import DEG, KNOT
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
@@ -207,8 +207,8 @@ class WaveFrequencyOnTrack:
         h = self.KNOT_S
         tk = (b * self.BLOCK + np.arange(self.BLOCK + 1)) * h
         x = self.evaluate(tk)
-        c = _quintic(x[:-1, 0:6], x[:-1, 6:12], x[:-1, 12:18], x[1:, 0:6], x[1:, 6:12],
-                     x[1:, 12:18], h)
+        c = quintic_coefficients(x[:-1, 0:6], x[:-1, 6:12], x[:-1, 12:18], x[1:, 0:6], x[1:, 6:12],
+                                 x[1:, 12:18], h)
         elev = x[:, 18]
         ce = np.zeros((self.BLOCK, 1, 6))
         ce[:, 0, 0], ce[:, 0, 1] = elev[:-1], elev[1:] - elev[:-1]     # elevation: linear
@@ -233,7 +233,7 @@ class WaveFrequencyOnTrack:
             sel = blocks == b
             c = self._block(int(b))[j[sel] - b * self.BLOCK]             # (n, 7, 6)
             s = (t[sel] / h - j[sel])[:, None]
-            v, d1, d2 = _poly(c, s, h, 2)
+            v, d1, d2 = quintic_values(c, s, h, 2)
             out[sel, 0:6], out[sel, 6:12], out[sel, 12:18] = v[:, :6], d1[:, :6], d2[:, :6]
             out[sel, 18] = v[:, 6]
         return out

@@ -40,7 +40,7 @@ class _DelayedFading(KalmanFilter):
     def __init__(self, x0, p0, dtype=np.float64) -> None:
         super().__init__(x0, p0, dtype)
         self._p_post = self.P        # P+ after the last accepted update (arrays are never mutated)
-        self._phi_acc = None         # product of the Phi since then; None: no predict since
+        self._phi_acc: np.ndarray | None = None   # product of the Phi since then; None: no predict since
         self._p_written = self.P     # the P this object last wrote, to detect outside assignment
         self.last_fading: float | np.ndarray = 1.0
         self.last_nis_faded = float('nan')
@@ -61,8 +61,11 @@ class _DelayedFading(KalmanFilter):
         self._p_written = self.P
 
     def _carried(self) -> np.ndarray:
-        """F = Phi_acc P+ Phi_acc^T: the part of the prior carried over from the last update."""
-        return _dot(_dot(self._phi_acc, self._p_post), self._phi_acc.T)
+        """F = Phi_acc P+ Phi_acc^T: the part of the prior carried over from the last update
+        (called after a predict only)."""
+        phi = self._phi_acc
+        assert phi is not None
+        return _dot(_dot(phi, self._p_post), phi.T)
 
     def _fade(self, y, h, r, s0) -> np.ndarray | None:
         """The faded prior P- (or None for no fading); sets last_fading."""

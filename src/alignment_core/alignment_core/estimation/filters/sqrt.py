@@ -126,6 +126,9 @@ class CarlsonFilter(_Factored):
 
     @P.setter
     def P(self, value) -> None:
+        self._set_p(value)
+
+    def _set_p(self, value) -> None:
         self._s = chol_upper(np.array(value, dtype=self.dtype))
 
     @property
@@ -268,9 +271,11 @@ class SqrtFadingFilter(CarlsonFilter):
         self.last_fading = 1.0
         super().__init__(x0, p0, dtype)
 
-    @CarlsonFilter.P.setter
-    def P(self, value) -> None:
-        CarlsonFilter.P.fset(self, value)
+    _s_post: np.ndarray                   # S+ after the last update
+    _phi_acc: np.ndarray | None           # product of the Phi since then; None: no predict since
+
+    def _set_p(self, value) -> None:
+        super()._set_p(value)
         self._s_post, self._phi_acc = self._s, None
 
     def predict(self, phi: np.ndarray, qd: np.ndarray) -> None:

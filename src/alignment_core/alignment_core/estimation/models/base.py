@@ -1,6 +1,6 @@
 """The interface every error-state model offers the transfer-alignment engine.
 
-The engine (transfer_alignment.py) owns the slave strapdown, the sensor-bias estimates, the
+The engine (estimation/engine.py, docs/engine.md) owns the slave strapdown, the sensor-bias estimates, the
 lever arm and the matching reference; a model owns the error state: its labels, how it
 propagates, what it measures and how an estimate is fed back. Per IMU interval the engine
 calls `transition(p)` / `process_noise(h)` (or, for a nonlinear model, `propagator(p)`); per
@@ -23,19 +23,17 @@ Phi = I and no process noise.
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
 
-from alignment_core.geometry.rotations import dcm_to_rotvec_small
+from alignment_core.geometry.rotations import dcm_to_rotvec
 from alignment_core.navigation.strapdown import NavState
 
 # state kinds, for per-block tuning (the multiple-factor STF's alpha per kind)
 PHI, DV, EPS, NABLA, OTHER = 0, 1, 2, 3, 4
-KIND_NAMES = ('phi', 'dV', 'eps', 'nabla', 'other')
 
 
 @dataclass(slots=True)
@@ -102,6 +100,12 @@ class Measurement(NamedTuple):
     r: np.ndarray
     hfun: Callable[[np.ndarray], np.ndarray] | None = None
 
+    def matrix(self) -> np.ndarray:
+        """H of a linear measurement (the option wrappers check that their base is linear)."""
+        if self.h is None:
+            raise TypeError('a nonlinear measurement has no H matrix')
+        return self.h
+
 
 class ErrorModel:
     """Base class: subclasses set the class attributes and implement the methods.
@@ -164,43 +168,16 @@ class ErrorModel:
         raise NotImplementedError
 
 
-def rotation_matrix(v: np.ndarray) -> np.ndarray:
-    """exp([v x]) by Rodrigues' formula, I + s [v x] + c (v v^T - |v|^2 I) (series near zero),
-    for one vector in scalar arithmetic (several times cheaper than the batch routine)."""
-    x, y, z = float(v[0]), float(v[1]), float(v[2])
-    a2 = x * x + y * y + z * z
-    if a2 < 1e-12:
-        s, c = 1.0 - a2 / 6.0, 0.5 - a2 / 24.0
-    else:
-        a = math.sqrt(a2)
-        s, c = math.sin(a) / a, (1.0 - math.cos(a)) / a2
-    d = 1.0 - c * a2
-    return np.array([[d + c * x * x, c * x * y - s * z, c * x * z + s * y],
-                     [c * x * y + s * z, d + c * y * y, c * y * z - s * x],
-                     [c * x * z - s * y, c * y * z + s * x, d + c * z * z]])
-
-
 def nominal_attitude(m: Match) -> np.ndarray:
     """C_m c_nom: the aircraft attitude the master predicts with zero misalignment."""
     return m.c_m if m.c_nom is None else m.c_m @ m.c_nom
-
-
-def skew_into(m: np.ndarray, r: int, c: int, v: np.ndarray) -> None:
-    """Write [v x] into the 3x3 block of m at (r, c)."""
-    x, y, z = v[0], v[1], v[2]
-    m[r, c + 1] = -z
-    m[r, c + 2] = y
-    m[r + 1, c] = z
-    m[r + 1, c + 2] = -x
-    m[r + 2, c] = -y
-    m[r + 2, c + 1] = x
 
 
 def relative_misalignment(c_m: np.ndarray, c_na: np.ndarray, p_rel: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
     """mu = log(C_m^T C_a) (aircraft axes) and its 1-sigma from the nav-frame covariance p_rel
     of the relative attitude error, rotated to aircraft axes."""
-    return dcm_to_rotvec_small(c_m.T @ c_na), np.sqrt(np.diag(c_na.T @ p_rel @ c_na))
+    return dcm_to_rotvec(c_m.T @ c_na), np.sqrt(np.diag(c_na.T @ p_rel @ c_na))
 
 
 class ModelWrapper(ErrorModel):
@@ -274,10 +251,11 @@ class AugmentedModel(ModelWrapper):
 
     def base_measurement(self, m: Match, corr: Corrections) -> Measurement:
         """The base's measurement with H widened by zero columns for the appended states."""
-        z, h, r, _ = self.base.measurement(m, corr)
+        meas = self.base.measurement(m, corr)
+        h = meas.matrix()
         hh = np.zeros((h.shape[0], self.n))
         hh[:, :self.nb] = h
-        return Measurement(z, hh, r)
+        return Measurement(meas.z, hh, meas.r)
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
         return self.base.misalignment(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

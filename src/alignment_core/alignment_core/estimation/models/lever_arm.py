@@ -25,11 +25,12 @@ class LeverArmStates(AugmentedModel):
         super().__init__(base, '+lever_arm', ('dr_x', 'dr_y', 'dr_z'), sigma_m)
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
-        z, hh, r = self.base_measurement(m, corr)[:3]
+        meas = self.base_measurement(m, corr)
+        hh = meas.matrix()
         cw = m.c_m @ skew(m.w_m)
         for row, axis in enumerate(self.velocity_rows):
             hh[row, self.nb:] = cw[axis]
-        return Measurement(z, hh, r)
+        return meas
 
     def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         xb = self.base.feedback(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

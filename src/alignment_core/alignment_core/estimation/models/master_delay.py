@@ -29,9 +29,9 @@ from alignment_core.estimation.models.base import (
     ErrorModel,
     Match,
     Measurement,
-    rotation_matrix,
 )
 from alignment_core.estimation.models.rate_matching import mid_interval_attitude
+from alignment_core.geometry.rotations import rotvec_to_dcm
 from alignment_core.navigation.strapdown import NavState
 
 
@@ -50,12 +50,12 @@ class MasterDelayState(AugmentedModel):
         if na and m.w_n is not None:
             col[nv:nv + na] = -m.w_n[list(self.attitude_rows)]
         if rows > nv + na and m.rate is not None:
-            col[nv + na:nv + na + 3] = mid_interval_attitude(m).T @ m.rate.w_dot_n
+            col[nv + na:nv + na + 3] = mid_interval_attitude(m, m.rate).T @ m.rate.w_dot_n
         return col
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
         meas = self.base_measurement(m, corr)
-        meas.h[:, self.nb] = self.column(m, len(meas.z))
+        meas.matrix()[:, self.nb] = self.column(m, len(meas.z))
         return meas
 
     def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
@@ -67,5 +67,5 @@ class MasterDelayState(AugmentedModel):
         C_m(t) = exp([w_n dt x]) C_m(t - dt) (the dt sigma's share, |w_n| sigma_dt, is left out:
         0.02 rad/s x 1 ms is 0.07')."""
         if m.w_n is not None:
-            m = replace(m, c_m=rotation_matrix(m.w_n * x[self.nb]) @ m.c_m)
+            m = replace(m, c_m=rotvec_to_dcm(m.w_n * x[self.nb]) @ m.c_m)
         return self.base.misalignment(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

@@ -36,10 +36,9 @@ from alignment_core.estimation.models.base import (
     Match,
     Measurement,
     ModelWrapper,
-    rotation_matrix,
-    skew_into,
+    RateInputs,
 )
-from alignment_core.geometry.rotations import quat_to_dcm
+from alignment_core.geometry.rotations import quat_to_dcm, rotvec_to_dcm, skew_into
 
 PHI_LABELS = ('phi_E', 'phi_N', 'phi_U')
 EPS_LABELS = ('eps_x', 'eps_y', 'eps_z')
@@ -55,16 +54,10 @@ def _block(labels: tuple[str, ...], names: tuple[str, ...]) -> int | None:
     return i if labels[i:i + 3] == names else None
 
 
-def supports_rate_matching(base: ErrorModel) -> bool:
-    """A linear model with phi and eps (three each) can take rate rows."""
-    return (not base.nonlinear and _block(base.labels, PHI_LABELS) is not None
-            and _block(base.labels, EPS_LABELS) is not None)
-
-
-def mid_interval_attitude(m: Match) -> np.ndarray:
+def mid_interval_attitude(m: Match, rate: RateInputs) -> np.ndarray:
     """C_a at the middle of the rate interval: the slave attitude at the match turned back by
     half the interval's angle increment (body axes)."""
-    return quat_to_dcm(m.ins.q_nb) @ rotation_matrix(-0.5 * m.rate.dtheta)
+    return quat_to_dcm(m.ins.q_nb) @ rotvec_to_dcm(-0.5 * rate.dtheta)
 
 
 class RateMatching(ModelWrapper):
@@ -72,20 +65,19 @@ class RateMatching(ModelWrapper):
     matches that carry `rate` inputs (from the second master sample on the IMU grid)."""
 
     def __init__(self, base: ErrorModel, arw: float, sigma_w: float) -> None:
-        if not supports_rate_matching(base):
+        i_phi, i_eps = _block(base.labels, PHI_LABELS), _block(base.labels, EPS_LABELS)
+        if base.nonlinear or i_phi is None or i_eps is None:
             raise ValueError(f'rate matching needs a linear model with phi and eps states, not {base.name}')
         super().__init__(base, '+rate')
-        self.i_phi = _block(base.labels, PHI_LABELS)
-        self.i_eps = _block(base.labels, EPS_LABELS)
+        self.i_phi, self.i_eps = i_phi, i_eps
         self.i_phi_m = _block(base.labels, PHI_M_LABELS)
         self.i_theta_dot = _block(base.labels, THETA_DOT_LABELS)
         self.arw2 = float(arw) ** 2
         self.sigma2 = float(sigma_w) ** 2
 
-    def rate_rows_of(self, m: Match) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(z_w (3,), H_w (3, n), R_w (3, 3)) at a match with rate inputs."""
-        rt = m.rate
-        c = mid_interval_attitude(m)
+    def rate_rows_of(self, m: Match, rt: RateInputs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(z_w (3,), H_w (3, n), R_w (3, 3)) at a match with rate inputs rt (= m.rate)."""
+        c = mid_interval_attitude(m, rt)
         pred = c.T @ rt.omega_n
         z = rt.w_b - pred
         h = np.zeros((3, self.n))
@@ -109,9 +101,9 @@ class RateMatching(ModelWrapper):
         meas = self.base.measurement(m, corr)
         if m.rate is None:
             return meas
-        z_w, h_w, r_w = self.rate_rows_of(m)
+        z_w, h_w, r_w = self.rate_rows_of(m, m.rate)
         k = len(meas.z)
         r = np.zeros((k + 3, k + 3))
         r[:k, :k] = meas.r
         r[k:, k:] = r_w
-        return Measurement(np.concatenate([meas.z, z_w]), np.vstack([meas.h, h_w]), r)
+        return Measurement(np.concatenate([meas.z, z_w]), np.vstack([meas.matrix(), h_w]), r)

@@ -37,11 +37,16 @@ from alignment_core.estimation.models.base import (
     Propagation,
     nominal_attitude,
     relative_misalignment,
-    skew_into,
 )
 from alignment_core.estimation.models.velocity_matching import attitude_variances, noise_densities
-from alignment_core.geometry.rotations import quat_mul, quat_to_dcm, right_jacobian, rotvec_to_quat, skew
-from alignment_core.geometry.rotations import rotvec_to_dcm_small as rotation
+from alignment_core.geometry.rotations import (
+    quat_to_dcm,
+    right_jacobian,
+    rotate_attitude,
+    rotvec_to_dcm,
+    skew,
+    skew_into,
+)
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import DEG
 
@@ -89,8 +94,7 @@ class Seed000Linear(ErrorModel):
         x_new = np.zeros(6)
         nav.v_n = nav.v_n - x[3:6]
         if self._feed_attitude(x, p):
-            q = quat_mul(rotvec_to_quat(x[0:3]), nav.q_nb)
-            nav.q_nb = q / np.sqrt(q @ q)
+            nav.q_nb = rotate_attitude(nav.q_nb, x[0:3])
         else:
             x_new[0:3] = x[0:3]
         return x_new
@@ -99,7 +103,7 @@ class Seed000Linear(ErrorModel):
         """log(C_m^T C_a) with C_a = exp([phi x]) C_a,est (phi = the part not yet fed back)."""
         c_na = quat_to_dcm(nav.q_nb)
         if np.any(x[0:3]):
-            c_na = rotation(x[0:3]) @ c_na
+            c_na = rotvec_to_dcm(x[0:3]) @ c_na
         return relative_misalignment(nominal_attitude(m), c_na, p[0:3, 0:3])
 
 
@@ -114,19 +118,19 @@ class Seed000LargeAngle(Seed000Linear):
         self.feeding_back = False
 
     def propagator(self, p: Propagation):
-        rot = rotation(-(p.w_ie + p.w_en) * p.h)
+        rot = rotvec_to_dcm(-(p.w_ie + p.w_en) * p.h)
         cor = np.eye(3) - p.h * skew(2.0 * p.w_ie + p.w_en)
         dvn = p.f_n * p.h
 
         def fun(x: np.ndarray) -> np.ndarray:
             phi = x[0:3]
-            return np.concatenate([rot @ phi, cor @ x[3:6] + dvn - rotation(phi) @ dvn])
+            return np.concatenate([rot @ phi, cor @ x[3:6] + dvn - rotvec_to_dcm(phi) @ dvn])
 
         def jac(x: np.ndarray) -> np.ndarray:
             phi = x[0:3]
             j = np.zeros((6, 6))
             j[0:3, 0:3] = rot
-            j[3:6, 0:3] = skew(rotation(phi) @ dvn) @ right_jacobian(-phi)   # J_l(phi) = J_r(-phi)
+            j[3:6, 0:3] = skew(rotvec_to_dcm(phi) @ dvn) @ right_jacobian(-phi)   # J_l(phi) = J_r(-phi)
             j[3:6, 3:6] = cor
             return j
         return fun, jac

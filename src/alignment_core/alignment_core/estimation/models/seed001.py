@@ -59,12 +59,11 @@ from alignment_core.estimation.models.base import (
     Propagation,
     nominal_attitude,
     relative_misalignment,
-    skew_into,
 )
 from alignment_core.geometry import earth
-from alignment_core.geometry.rotations import quat_mul, quat_to_dcm, rotvec_to_quat
+from alignment_core.geometry.rotations import quat_to_dcm, rotate_attitude, skew_into
 from alignment_core.navigation.strapdown import NavState
-from alignment_core.units import ARCMIN, DPH
+from alignment_core.units import ARCMIN, DEG, DPH, UG
 
 LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dlon', 'dlat', 'eps_x', 'eps_y', 'eps_z',
           'dVd', 'eps_D', 'dC')
@@ -157,8 +156,8 @@ class Seed001Doppler(ErrorModel):
     def process_noise(self, h: float) -> np.ndarray:
         qd = self._qd.get(h)
         if qd is None:
-            arw = self.t.arw_dpsh * np.pi / 180.0 / 60.0
-            vrw = self.t.vrw_ugpshz * 1e-6 * 9.80665
+            arw = self.t.arw_dpsh * DEG / 60.0
+            vrw = self.t.vrw_ugpshz * UG
             q = np.zeros(13)
             q[0:3] = arw ** 2 * h
             q[3:5] = vrw ** 2 * h
@@ -191,8 +190,7 @@ class Seed001Doppler(ErrorModel):
     def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         """phi, dV_E, dV_N, position and eps fed back; vertical velocity held to m.v_ref[2];
         the radar's errors kept in the state."""
-        q = quat_mul(rotvec_to_quat(x[0:3]), nav.q_nb)
-        nav.q_nb = q / np.sqrt(q @ q)
+        nav.q_nb = rotate_attitude(nav.q_nb, x[0:3])
         nav.v_n = np.array([nav.v_n[0] - x[3], nav.v_n[1] - x[4], m.v_ref[2]])
         nav.lon = nav.lon - float(x[5])
         nav.lat = nav.lat - float(x[6])

@@ -35,7 +35,7 @@ from alignment_core.estimation.models.base import (
     relative_misalignment,
 )
 from alignment_core.estimation.models.velocity_matching import attitude_variances, continuous, noise_densities
-from alignment_core.geometry.rotations import quat_mul, quat_to_dcm, rotvec_to_quat
+from alignment_core.geometry.rotations import quat_to_dcm, rotate_attitude
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import DPH, UG
 
@@ -78,8 +78,7 @@ class Seed002Horizontal(ErrorModel):
         return Measurement(m.z_vel[0:2], H, m.r_vel[0:2, 0:2])
 
     def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
-        q = quat_mul(rotvec_to_quat(x[2:5]), nav.q_nb)
-        nav.q_nb = q / np.sqrt(q @ q)
+        nav.q_nb = rotate_attitude(nav.q_nb, x[2:5])
         nav.v_n = np.array([nav.v_n[0] - x[0], nav.v_n[1] - x[1], m.v_ref[2]])
         corr.ba = corr.ba + np.array([x[5], x[6], 0.0])
         corr.bg = corr.bg + x[7:10]

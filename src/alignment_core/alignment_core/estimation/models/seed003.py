@@ -10,7 +10,7 @@ mu the static mounting misalignment (aircraft axes, random constant), theta the 
 (filter parameters `flexure_sigma_arcmin`, `flexure_tau_s`, per axis).
 
 Dynamics: phi, dV, eps, nabla as the velocity-matching model (velocity_matching.py, second-order
-Phi); mu' = 0; theta as above, discretised exactly (Van Loan, deck_flexure.gm2_discrete). The
+Phi); mu' = 0; theta as above, discretised exactly (Van Loan, gauss_markov.gm2_discrete). The
 blocks do not couple in F (theta only enters the measurement), so Phi and Qd are block-diagonal.
 
 Measurement (6 rows):
@@ -51,7 +51,6 @@ from alignment_core.estimation.models.base import (
     Measurement,
     Propagation,
     nominal_attitude,
-    rotation_matrix,
 )
 from alignment_core.estimation.models.velocity_matching import LABELS as VM_LABELS
 from alignment_core.estimation.models.velocity_matching import (
@@ -65,12 +64,13 @@ from alignment_core.estimation.models.velocity_matching import (
 )
 from alignment_core.gauss_markov import BETA_TAU, gm2_discrete
 from alignment_core.geometry.rotations import (
-    dcm_to_rotvec_small,
+    dcm_to_rotvec,
     floats,
-    normalized_f,
-    quat_mul_f,
     quat_to_dcm,
-    rotvec_to_quat_f,
+    rotate_attitude,
+    rotvec_to_dcm,
+    skew_cells,
+    skew_values,
 )
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import ARCMIN, DEG, DPH, UG
@@ -115,7 +115,7 @@ class Seed003VelocityAttitude(ErrorModel):
         # -[u x] at (0, PHI_M), as flat indices for one put()
         cells = [(3 + i, col + j) for col in (MU.start, THETA.start) for i in range(3) for j in range(3)]
         if master_states:
-            cells += [(0, 22), (0, 23), (1, 21), (1, 23), (2, 21), (2, 22)]    # skew_into's order
+            cells += skew_cells(0, PHI_M.start)
         self._h_cells = np.array([r * self._n + c for r, c in cells])
 
     def initial_covariance(self) -> np.ndarray:
@@ -170,27 +170,26 @@ class Seed003VelocityAttitude(ErrorModel):
 
     def reference_attitude(self, m: Match, corr: Corrections) -> np.ndarray:
         """C = C_m,est c_nom exp([mu_est x]): the aircraft attitude predicted from the master."""
-        return nominal_attitude(m) @ rotation_matrix(corr.mu)
+        return nominal_attitude(m) @ rotvec_to_dcm(corr.mu)
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
         c = self.reference_attitude(m, corr)
         c_a = quat_to_dcm(m.ins.q_nb)
         delta = c_a @ c.T
-        z = np.concatenate([m.z_vel, dcm_to_rotvec_small(delta.T)])
+        z = np.concatenate([m.z_vel, dcm_to_rotvec(delta.T)])
         h = self._h0.copy()               # the constant blocks: I (velocity), I (phi), -I (phi_m)
         neg_c = [-e for e in c.ravel().tolist()]
         vals = neg_c + neg_c              # H[3:6, MU] = H[3:6, THETA] = -C
-        if self.master:                   # H[0:3, PHI_M] = [(-u) x]  (skew_into's cells and signs)
+        if self.master:                   # H[0:3, PHI_M] = [(-u) x]
             ux, uy, uz = floats(m.u_n)
-            vals += [uz, -uy, -uz, ux, uy, -ux]
+            vals += skew_values(-ux, -uy, -uz)
         h.put(self._h_cells, vals)
         r = self._r0.copy()
         r[0:3, 0:3] = m.r_vel
         return Measurement(z, h, r)
 
     def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
-        phx, phy, phz = x[0:3].tolist()
-        nav.q_nb = np.array(normalized_f(quat_mul_f(rotvec_to_quat_f(phx, phy, phz), floats(nav.q_nb))))
+        nav.q_nb = rotate_attitude(nav.q_nb, x[0:3])
         nav.v_n = nav.v_n - x[3:6]
         corr.bg = corr.bg + x[6:9]
         corr.ba = corr.ba + x[9:12]

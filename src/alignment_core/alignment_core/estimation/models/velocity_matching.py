@@ -42,12 +42,12 @@ from alignment_core.estimation.models.base import (
     relative_misalignment,
 )
 from alignment_core.geometry.rotations import (
-    floats,
-    normalized_f,
-    quat_mul_f,
     quat_to_dcm,
-    rotvec_to_dcm_small,
-    rotvec_to_quat_f,
+    rotate_attitude,
+    rotvec_to_dcm,
+    skew_cells,
+    skew_into,
+    skew_values,
 )
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import ARCMIN, DEG, DPH, UG
@@ -71,7 +71,7 @@ def measurement(u_n: np.ndarray, n: int = N) -> np.ndarray:
         return H
     h = np.zeros((3, n))
     h[0, 3] = h[1, 4] = h[2, 5] = 1.0
-    _skew_into(h, 0, 12, -u_n)
+    skew_into(h, 0, 12, -u_n)
     return h
 
 
@@ -87,21 +87,12 @@ class NoiseDensities:
 _EYE = {12: np.eye(12), 15: np.eye(15)}
 
 
-def _skew_cells(r: int, c: int) -> list[tuple[int, int]]:
-    """The cells of [v x] at block (r, c), in the order of _skew_values."""
-    return [(r, c + 1), (r, c + 2), (r + 1, c), (r + 1, c + 2), (r + 2, c), (r + 2, c + 1)]
-
-
-def _skew_values(x: float, y: float, z: float) -> list[float]:
-    return [-z, y, z, -x, -y, x]
-
-
 def _fh_index(n: int) -> np.ndarray:
     """Flat indices of F h's non-zero cells in an (n, n) array, in the order transition() lists
     their values: [-w_in h x] at (0, 0), -C h at (0, 6), [f h x] at (3, 0),
     [-(2 w_ie + w_en) h x] at (3, 3), C h at (3, 9)."""
-    cells = (_skew_cells(0, 0) + [(i, 6 + j) for i in range(3) for j in range(3)] + _skew_cells(3, 0)
-             + _skew_cells(3, 3) + [(3 + i, 9 + j) for i in range(3) for j in range(3)])
+    cells = (skew_cells(0, 0) + [(i, 6 + j) for i in range(3) for j in range(3)] + skew_cells(3, 0)
+             + skew_cells(3, 3) + [(3 + i, 9 + j) for i in range(3) for j in range(3)])
     return np.array([r * n + c for r, c in cells])
 
 
@@ -123,10 +114,10 @@ def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.nda
     ie = w_ie.tolist()
     en = w_en.tolist()
     mh = -h
-    vals = (_skew_values(mh * (ie[0] + en[0]), mh * (ie[1] + en[1]), mh * (ie[2] + en[2]))
+    vals = (skew_values(mh * (ie[0] + en[0]), mh * (ie[1] + en[1]), mh * (ie[2] + en[2]))
             + [mh * e for e in c]
-            + _skew_values(h * fx, h * fy, h * fz)
-            + _skew_values(mh * (2.0 * ie[0] + en[0]), mh * (2.0 * ie[1] + en[1]), mh * (2.0 * ie[2] + en[2]))
+            + skew_values(h * fx, h * fy, h * fz)
+            + skew_values(mh * (2.0 * ie[0] + en[0]), mh * (2.0 * ie[1] + en[1]), mh * (2.0 * ie[2] + en[2]))
             + [h * e for e in c])
     fh = np.zeros((n, n))
     fh.put(idx, vals)
@@ -135,17 +126,6 @@ def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.nda
     phi = _EYE[n] + fh
     phi += half
     return phi
-
-
-def _skew_into(m: np.ndarray, r: int, c: int, v: np.ndarray) -> None:
-    """Write [v x] into the 3x3 block of m at (r, c) (faster than building it apart)."""
-    x, y, z = v[0], v[1], v[2]
-    m[r, c + 1] = -z
-    m[r, c + 2] = y
-    m[r + 1, c] = z
-    m[r + 1, c + 2] = -x
-    m[r + 2, c] = -y
-    m[r + 2, c + 1] = x
 
 
 def process_noise(q: NoiseDensities, h: float, n: int = N) -> np.ndarray:
@@ -158,10 +138,10 @@ def process_noise(q: NoiseDensities, h: float, n: int = N) -> np.ndarray:
 def continuous(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray, n: int = N) -> np.ndarray:
     """F (n, n) of the continuous model (transition() is I + F h + (F h)^2 / 2 of it)."""
     f = np.zeros((n, n))
-    _skew_into(f, 0, 0, -(w_ie + w_en))
+    skew_into(f, 0, 0, -(w_ie + w_en))
     f[0:3, 6:9] = -c_nb
-    _skew_into(f, 3, 0, f_n)
-    _skew_into(f, 3, 3, -(2.0 * w_ie + w_en))
+    skew_into(f, 3, 0, f_n)
+    skew_into(f, 3, 3, -(2.0 * w_ie + w_en))
     f[3:6, 9:12] = c_nb
     return f
 
@@ -226,8 +206,7 @@ class VelocityMatching(ErrorModel):
     def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         """C <- (I + [phi x]) C (exactly: exp([phi x]) C), V <- V - dV, biases accumulate;
         the master's attitude error is not fed back (it is the master's)."""
-        phx, phy, phz = x[0:3].tolist()
-        nav.q_nb = np.array(normalized_f(quat_mul_f(rotvec_to_quat_f(phx, phy, phz), floats(nav.q_nb))))
+        nav.q_nb = rotate_attitude(nav.q_nb, x[0:3])
         nav.v_n = nav.v_n - x[3:6]
         corr.bg = corr.bg + x[6:9]
         corr.ba = corr.ba + x[9:12]
@@ -241,7 +220,7 @@ class VelocityMatching(ErrorModel):
         c_na = quat_to_dcm(nav.q_nb)
         c_m = nominal_attitude(m)
         if self._n == 15:
-            c_m = rotvec_to_dcm_small(x[12:15]) @ c_m
+            c_m = rotvec_to_dcm(x[12:15]) @ c_m
             p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
         else:
             p_rel = p[0:3, 0:3]

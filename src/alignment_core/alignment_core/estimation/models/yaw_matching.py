@@ -27,6 +27,6 @@ class YawMatching(ModelWrapper):
         self.keep = np.array(list(range(nv)) + [nv + 2])
 
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
-        z, h, r, _ = self.base.measurement(m, corr)
+        meas = self.base.measurement(m, corr)
         k = self.keep
-        return Measurement(z[k], h[k], r[np.ix_(k, k)])
+        return Measurement(meas.z[k], meas.matrix()[k], meas.r[np.ix_(k, k)])

@@ -13,7 +13,7 @@ midship is a cos(theta), d(theta)/dt = omega_e):
   N = -rho g a sin x sinc(kB sin x/2) e^{-kd} d P(kL cos x) / (k^2 cos^2 x) cos(theta)
 with P(q) = 2 sin(q/2) - q cos(q/2) and sinc(y) = sin(y)/y.
 
-Our reading of the garbled print (seeds.md):
+Our reading of the garbled print (seed 002, docs/references.md):
 - Y: the digest prints sinc(kB cos x/2); the length average must be sinc(kL cos x/2), as
   the beam average in X is sinc(kB sin x/2). With that, X and Y are the Froude-Krylov
   forces on the box with the depth integral (1 - e^{-kd})/k replaced by d e^{-kd} (the
@@ -36,7 +36,7 @@ import math
 
 import numpy as np
 
-G = 9.80665
+from alignment_core.units import G0 as G
 
 
 def _sinc(y):

@@ -70,7 +70,7 @@ def lat_of_north(north, lat0: float, arc0: float | None = None):
     return lat
 
 
-def _quintic(y0, d0, a0, y1, d1, a1, h):
+def quintic_coefficients(y0, d0, a0, y1, d1, a1, h):
     """Coefficients c0..c5 (last axis) of the quintic in s = (t - t0)/h with the given value,
     first and second time derivatives at both ends."""
     c0, c1, c2 = y0, h * d0, 0.5 * h * h * a0
@@ -83,7 +83,7 @@ def _quintic(y0, d0, a0, y1, d1, a1, h):
     return np.stack([c0, c1, c2, c3, c4, c5], axis=-1)
 
 
-def _poly(c, s, h, order: int = 2):
+def quintic_values(c, s, h, order: int = 2):
     """Value and time derivatives up to `order` of quintics c (..., 6) at s (broadcast)."""
     out = []
     p = c[..., 5]
@@ -173,12 +173,12 @@ class ManoeuvringTrack:
         f0 = np.vstack([prev_f, fs[:-1]]) if n > 1 else prev_f[None]
         y1, f1 = np.asarray(ys), np.asarray(fs)
         ch0, ch1 = self._channels(y0, f0), self._channels(y1, f1)
-        coef = _quintic(*ch0, *ch1, h)                 # (n, 4, 6)
+        coef = quintic_coefficients(*ch0, *ch1, h)     # (n, 4, 6)
         self.coef = np.concatenate([self.coef, coef])
         # longitude at the new knots
         nodes = _GL_U[None, :]
-        north = _poly(coef[:, None, 0], nodes, h, 0)[0]
-        e_dot = _poly(coef[:, None, 1], nodes, h, 1)[1]
+        north = quintic_values(coef[:, None, 0], nodes, h, 0)[0]
+        e_dot = quintic_values(coef[:, None, 1], nodes, h, 1)[1]
         q = self._q(north)
         inc = h * np.sum(q * e_dot * _GL_WU, axis=1)
         self.lon_knots = np.concatenate([self.lon_knots, self.lon_knots[-1] + np.cumsum(inc)])
@@ -218,13 +218,13 @@ class ManoeuvringTrack:
         idx = np.clip(np.floor(t / h).astype(np.int64), 0, len(self.coef) - 1)
         s = t / h - idx
         c = self.coef[idx]                                           # (N, 4, 6)
-        val, d1, d2 = _poly(c, s[:, None], h, 2)
+        val, d1, d2 = quintic_values(c, s[:, None], h, 2)
         north, east = val[:, 0], val[:, 1]
         lat = lat_of_north(north, self.lat0, self.arc0)
         # longitude: knot value plus the part step, Gauss-Legendre on [t_k, t]
         nodes = s[:, None] * _GL_U[None, :]                          # (N, 8)
-        n_nodes = _poly(c[:, None, 0], nodes, h, 0)[0]
-        ed_nodes = _poly(c[:, None, 1], nodes, h, 1)[1]
+        n_nodes = quintic_values(c[:, None, 0], nodes, h, 0)[0]
+        ed_nodes = quintic_values(c[:, None, 1], nodes, h, 1)[1]
         part = h * s * np.sum(self._q(n_nodes) * ed_nodes * _GL_WU, axis=1)
         lon = self.lon_knots[idx] + part
         n = len(t)
@@ -237,8 +237,3 @@ class ManoeuvringTrack:
                 'phi': val[:, 3], 'phi_dot': d1[:, 3], 'phi_ddot': d2[:, 3],
                 'lat': lat, 'lon': lon}
 
-    def knot_states(self, t_max: float) -> tuple[np.ndarray, np.ndarray]:
-        """Grid times and RK4 states (knots x 11) up to t_max."""
-        self._ensure(t_max)
-        k = int(math.floor(t_max / self.h)) + 1
-        return np.arange(k) * self.h, self.states[:k]

@@ -46,7 +46,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
-G = 9.80665
+from alignment_core.units import G0
+
 RHO_SEA = 1025.0
 RHO_AIR = 1.293          # seed 002 (0 deg C)
 
@@ -158,10 +159,10 @@ KVLCC2_MODEL = replace(KVLCC2.scaled(7.0 / 320.0, 'KVLCC2 model (Y&Y L7)'), beam
 def _carrier() -> MmgShip:
     """A ~310 m aircraft carrier. Where each number comes from:
     - Lpp 310 m, B 40.5 m (waterline), d 11.3 m, Cb 0.62 -> volume 87960 m^3; GM 3.0 m,
-      natural roll 20 s, zeta 0.05 (0 kn; the ship config may override): ship-motion.md.
+      natural roll 20 s, zeta 0.05 (0 kn; the ship config may override): docs/ship-motion.md.
     - KG ~ 14 m (KM = KB + BM ~ 0.53 d + B^2 Cwp^2 / (12 d Cb) ~ 17 m, minus GM), hence
       z_H = z_R = KG - d/2 = 8.35 m; lateral windage centre ~13 m above the waterline,
-      G 2.7 m above it: wind arm 10 m; windage A_F 2400 m^2, A_L 8500 m^2 (ship-motion.md).
+      G 2.7 m above it: wind arm 10 m; windage A_F 2400 m^2, A_L 8500 m^2 (docs/ship-motion.md).
     - Hull derivatives: Y&Y's KVLCC2 values scaled by the slender-body aspect ratio
       (d/L)_carrier / (d/L)_KVLCC2 = 0.0365/0.0650 = 0.561 (linear lift of a low-aspect wing,
       Y'_v ~ pi d/L + ...; the same factor for every Y', N' and the X' cross terms). Added
@@ -169,7 +170,7 @@ def _carrier() -> MmgShip:
       J_z/I_z = 0.61 (KVLCC2), m_x/m = 0.05 (fine hull; KVLCC2 0.076). k_zz 0.25 L.
     - Resistance R'_0 = 0.020: effective power ~125 MW at 30 kn (194 MW shaft, eta_D 0.65),
       i.e. C_T ~ 0.005 on a wetted surface of 3.9 L d (Mumford).
-    - 4 propellers of 6.4 m (ship-motion.md); w_P0 0.136 and t_P 0.145 from Holtrop & Mennen
+    - 4 propellers of 6.4 m (docs/ship-motion.md); w_P0 0.136 and t_P 0.145 from Holtrop & Mennen
       (1982) twin-screw formulas; K_T = 0.55 - 0.35 J - 0.15 J^2, a Wageningen-B-like curve
       for P/D ~ 1.3 (our choice: K_T(0) 0.55, zero thrust at J ~ 1.5); C1, C2 and x'_P from
       KVLCC2 but with C2 the same both ways (twin screws: port/starboard symmetric).
@@ -242,7 +243,7 @@ class MmgModel:
         self.x_h_m = s.x_h * L
         w = 2.0 * math.pi / s.roll_period_s
         self.w_roll = w
-        self.i44 = m * G * s.gm / (w * w)
+        self.i44 = m * G0 * s.gm / (w * w)
         self.thrust_k = s.n_propellers * rho * s.d_p**4
 
     # --- forces -------------------------------------------------------------------------

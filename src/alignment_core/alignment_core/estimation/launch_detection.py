@@ -1,0 +1,131 @@
+"""When the aircraft starts to move on the deck, from the LDV alone: the launch (a confirmed run of
+fast samples) and slow creep before it (a median over a window). The engine consults it once per
+LDV sample and applies what it decides (docs/engine.md, launch detection)."""
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from alignment_core.samples import LdvSample
+
+
+@dataclass(frozen=True)
+class LdvDecision:
+    """What the engine does with one LDV sample. `record`: the samples to record now, in stamp
+    order (empty: the sample is held back and no match may run); `launch_ns`: the validity time
+    of a launch confirmed by this sample, if any; `creep`: creep was first seen at this sample."""
+    record: tuple[LdvSample, ...] = ()
+    launch_ns: int | None = None
+    creep: bool = False
+
+
+@dataclass(frozen=True)
+class LaunchThresholds:
+    """The detector's tuning (filter.*): speeds in m/s, counts in samples, latency in ns."""
+    launch_mps: float
+    confirm_samples: int
+    creep_mps: float                  # 0: no creep detection
+    creep_window: int
+    ldv_latency_ns: int = 0
+
+
+class LaunchDetector:
+    """Parked until the LDV shows a launch (`confirm_samples` valid samples in a row faster than
+    `launch_mps`, dated at the first of them) or creep (the per-axis median of the last
+    `creep_window` valid samples faster than `creep_mps`); after creep, a run of samples faster
+    than the median by `launch_mps` is the launch. Samples above the launch threshold are held
+    back until their run is confirmed or broken."""
+
+    def __init__(self, limits: LaunchThresholds) -> None:
+        self.limits = limits
+        self._moving = False
+        self._t_moving: int | None = None      # validity time from which the aircraft moves on the deck
+        self._t_launch: int | None = None      # validity time of the launch
+        self._held: list[LdvSample] = []       # fast samples (and gaps among them), not yet confirmed
+        self._held_fast = 0
+        self._fast_run: list[int] = []         # stamps of fast samples in a row while creeping
+        self._recent: deque[np.ndarray] = deque(maxlen=max(limits.creep_window, 1))
+        self._recent_sum = np.zeros(3)         # running sum of _recent (a cheap trigger for the median)
+
+    @property
+    def moving(self) -> bool:
+        return self._moving
+
+    @property
+    def t_moving_ns(self) -> int | None:
+        return self._t_moving
+
+    @property
+    def t_launch_ns(self) -> int | None:
+        return self._t_launch
+
+    def observe(self, s: LdvSample) -> LdvDecision:
+        """The decision for the next LDV sample (stamp order)."""
+        lim = self.limits
+        speed = float(np.sqrt(s.v_s @ s.v_s)) if s.valid else 0.0
+        fast = speed > lim.launch_mps
+        if s.valid:
+            rl = self._recent
+            if len(rl) == rl.maxlen:
+                self._recent_sum -= rl[0]
+            rl.append(s.v_s)
+            self._recent_sum += s.v_s
+        launch = None
+        if self._moving and self._t_launch is None:     # creeping: watch for the stroke
+            if s.valid and speed > lim.launch_mps + self._median_speed():
+                self._fast_run.append(s.t_ns)
+                if len(self._fast_run) >= lim.confirm_samples:
+                    launch = self._launch(self._fast_run[0] - lim.ldv_latency_ns)
+            elif s.valid:
+                self._fast_run.clear()
+        if self._moving:
+            return LdvDecision((s,), launch)
+        creep = False
+        if fast or (self._held and not s.valid):
+            self._held.append(s)
+            self._held_fast += fast
+            if self._held_fast < lim.confirm_samples:
+                return LdvDecision()
+            launch = self._launch(self._held[0].t_ns - lim.ldv_latency_ns)
+        elif self._creeping():
+            self._moving = True
+            self._t_moving = s.t_ns - lim.ldv_latency_ns
+            creep = True
+        if not self._held:
+            return LdvDecision((s,), launch, creep)
+        held = self.release()
+        return LdvDecision(held if fast else (*held, s), launch, creep)
+
+    def release(self) -> tuple[LdvSample, ...]:
+        """The held samples, forgotten (at the end of the data: an unconfirmed run is parked)."""
+        held, self._held, self._held_fast = tuple(self._held), [], 0
+        return held
+
+    def _launch(self, t_v: int) -> int:
+        if not self._moving:
+            self._moving = True
+            self._t_moving = t_v
+        self._t_launch = t_v
+        return t_v
+
+    def _creeping(self) -> bool:
+        """The per-axis median of the last `creep_window` valid samples exceeds `creep_mps` in norm
+        (the median ignores single spikes; for a 1 cm/s LDV and 25 samples its noise is ~2.5 mm/s
+        per axis). The median is only computed when the window's mean is at least half as fast."""
+        lim = self.limits
+        w = lim.creep_window
+        if lim.creep_mps <= 0.0 or len(self._recent) < w:
+            return False
+        mean = self._recent_sum / w
+        if float(np.sqrt(mean @ mean)) <= 0.5 * lim.creep_mps:
+            return False
+        return self._median_speed() > lim.creep_mps
+
+    def _median_speed(self) -> float:
+        """|per-axis median| of the recent valid samples (0 with none)."""
+        if not self._recent:
+            return 0.0
+        med = np.median(np.asarray(self._recent), axis=0)
+        return float(np.sqrt(med @ med))

@@ -1,0 +1,251 @@
+"""Matching: a master or Doppler sample and the slave solution at its time of validity made into a
+filter update (delay-aware H Phi^-1), and the estimate fed back into the live and the stored slave
+solutions. The engine's collaborator; it decides nothing about when to match (docs/engine.md)."""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from typing import NamedTuple, Protocol, cast
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from alignment_core.estimation.config import FilterConfig
+from alignment_core.estimation.filter_factory import EngineFilter
+from alignment_core.estimation.filters.base import NonlinearFilter, solve
+from alignment_core.estimation.filters.lowpass import ButterworthLowPass
+from alignment_core.estimation.health import check_health
+from alignment_core.estimation.models import Corrections, ErrorModel, Match, Measurement
+from alignment_core.estimation.models.base import RateInputs
+from alignment_core.estimation.outputs import Counters
+from alignment_core.geometry.rotations import cross3, quat_conj, quat_mul, quat_to_dcm
+from alignment_core.navigation.history import LdvRecord, SlaveHistory
+from alignment_core.navigation.strapdown import NavState, Strapdown
+from alignment_core.samples import DopplerSample, MasterSample
+from alignment_core.units import DEG
+from alignment_core.validation import ConfigError
+
+Past = tuple[NavState, np.ndarray | None]       # the slave at a validity time, Phi from there to now
+Extras = tuple[np.ndarray, np.ndarray | None, RateInputs | None]   # (w_n, a_n, rate) of a Match
+
+
+class _DopplerModel(Protocol):
+    def doppler_measurement(self, v_n: np.ndarray, z: np.ndarray, r: np.ndarray | None = None) -> Measurement: ...
+
+
+@dataclass
+class LiveSolution:
+    """The slave strapdown at t_ns, the filter estimating its errors and the slave's past
+    solutions over the last IMU steps (created at initialisation)."""
+    ins: Strapdown
+    kf: EngineFilter
+    t_ns: int
+    history: SlaveHistory
+
+
+class Reference(NamedTuple):
+    """What a master sample predicts for the slave at its validity time (nav frame, SI)."""
+    c_m: np.ndarray          # (3, 3) master attitude, nav <- ship body
+    r: np.ndarray            # (3,) lever arm used (ship axes), deck displacement included
+    v_rel: np.ndarray        # (3,) LDV velocity relative to the deck (zero while parked)
+    u_n: np.ndarray          # (3,) C_m (w_m x r + v_rel)
+    v_ref: np.ndarray        # (3,) master velocity + u_n
+    moving: bool             # the LDV at the validity time says the aircraft moves
+
+
+@dataclass
+class MatchResults:
+    """What the matches leave: the published misalignment and its 1-sigma (rad, aircraft axes),
+    the last a-posteriori state before feedback, the last NIS, the stamp of the last accepted
+    Doppler update, and the corrections fed back outside the strapdown (sensor biases, lever arm)."""
+    mu: np.ndarray
+    mu_sigma: np.ndarray
+    x: np.ndarray
+    nis: float = math.nan
+    t_doppler_update: int | None = None
+    corr: Corrections = field(default_factory=Corrections)
+
+
+class Matcher:
+    """Master and Doppler updates for one engine: the reference (lever arm, deck velocity), the
+    measurement from the model, the update and the closed-loop feedback."""
+
+    def __init__(self, cfg: FilterConfig, model: ErrorModel, imu_rate_hz: float, span_ns: int,
+                 counters: Counters) -> None:
+        self._cfg = cfg
+        self._model = model
+        self._counters = counters
+        self._compensate = cfg.lever_arm_treatment == 'compensation'
+        self._r0 = np.asarray(cfg.lever_arm_m, dtype=float)
+        self._lowpass: ButterworthLowPass | None = None
+        if cfg.lever_arm_treatment == 'butterworth':
+            if not cfg.butterworth_cutoff_hz < 0.5 * imu_rate_hz:
+                raise ConfigError(f"filter.butterworth_cutoff_hz = {cfg.butterworth_cutoff_hz} must be below the "
+                                  f"Nyquist frequency {0.5 * imu_rate_hz} Hz of the {imu_rate_hz} Hz matching rate")
+            self._lowpass = ButterworthLowPass(cfg.butterworth_cutoff_hz, imu_rate_hz)
+        self._r_moving = np.eye(3) * (cfg.ldv_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
+        self._r_parked = np.eye(3) * (cfg.parked_velocity_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
+        self._gate = cfg.gate_chi2 if cfg.gate_chi2 > 0.0 else None
+        self._doppler_lat_ns = int(round(cfg.doppler_latency_s * 1e9))
+        psi = cfg.heading_on_deck_deg * DEG
+        # nominal mounting on the deck: C_a^s = Rz(-heading on deck) (None: the identity)
+        self.c_nom = None if psi == 0.0 else Rotation.from_rotvec([0.0, 0.0, -psi]).as_matrix()
+        # rate matching / delay state: the last IMU intervals and the previous master sample
+        self.tracks_intervals = cfg.rate_matching or cfg.master_delay_state
+        self._intervals: deque[tuple[int, float, np.ndarray, np.ndarray]] = deque(
+            maxlen=int(span_ns / (1e9 / imu_rate_hz)) + 8)      # (t_end, h, raw gyro rate, dv_n)
+        self._prev_master: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None   # t_v, C_m, v_b, w_b
+        self.results = MatchResults(mu=np.zeros(3), mu_sigma=np.full(3, cfg.init_attitude_sigma_deg * DEG),
+                                    x=np.zeros(model.n))
+
+    def record_interval(self, t_ns: int, h: float, gyro: np.ndarray, dv_n: np.ndarray) -> None:
+        """An IMU interval ending at t_ns (length h s, raw gyro rate, nav-frame velocity change)."""
+        self._intervals.append((t_ns, h, gyro, dv_n))
+
+    def reference(self, m: MasterSample, ldv: LdvRecord | None, deck_disp: np.ndarray) -> Reference:
+        """The reference for the slave from master sample m and the LDV at its validity time."""
+        c_m = quat_to_dcm(m.q_nb)
+        moving = ldv is not None and ldv.moving
+        r = self._lever_arm(ldv.disp if ldv is not None else deck_disp)
+        v_rel = ldv.v_s if (ldv is not None and ldv.valid and moving) else np.zeros(3)
+        u_n = c_m @ (cross3(m.w_b, r) + v_rel)
+        return Reference(c_m, r, v_rel, u_n, c_m @ m.v_b + u_n, moving)
+
+    def _lever_arm(self, deck_disp: np.ndarray) -> np.ndarray:
+        """The lever arm put into the reference (ship axes): the surveyed spot (plus the
+        estimated correction) under compensation, and the LDV-integrated deck displacement."""
+        if not self._compensate:
+            return deck_disp
+        if self._cfg.lever_arm_states:
+            return self._r0 + self.results.corr.dr + deck_disp
+        return self._r0 + deck_disp
+
+    def extras(self, live: LiveSolution, t_v: int, m: MasterSample, ref: Reference) -> Extras:
+        """(w_n, a_n, rate inputs) for the delay state and rate matching (models/master_delay.py,
+        rate_matching.py): the master's nav-frame body rate; the deck spot's acceleration, from the
+        slave's velocity change over the IMU interval ending at t_v while parked, else from the
+        master's last two samples with today's lever arm and LDV velocity (the undelayed parts);
+        the gyro and master rates over that interval when the previous master sample started it."""
+        c_m, r, v_rel = ref.c_m, ref.r, ref.v_rel
+        w_n = c_m @ m.w_b
+        prev, self._prev_master = self._prev_master, (t_v, c_m, m.v_b, m.w_b)
+        iv = None
+        for item in reversed(self._intervals):
+            if item[0] == t_v:
+                iv = item
+                break
+            if item[0] < t_v:
+                break
+        a_n = None
+        if not ref.moving and iv is not None:
+            a_n = iv[3] / iv[1]
+        elif ref.moving and prev is not None and prev[0] < t_v:
+            fixed = cross3(m.w_b, r) + v_rel
+            a_n = (c_m @ (m.v_b + fixed) - prev[1] @ (prev[2] + cross3(prev[3], r) + v_rel)) / ((t_v - prev[0]) * 1e-9)
+        rate = None
+        if self._cfg.rate_matching and iv is not None and prev is not None \
+                and t_v - prev[0] == int(round(iv[1] * 1e9)):
+            w_in = live.ins.w_ie + live.ins.w_en
+            w_prev = prev[1] @ prev[3]
+            w_mean = 0.5 * (w_n + w_prev)
+            w_b = iv[2] - self.results.corr.bg
+            rate = RateInputs(w_b=w_b, dtheta=w_b * iv[1], omega_n=w_mean + w_in, w_n=w_mean,
+                              w_dot_n=(w_n - w_prev) / iv[1], h=iv[1])
+        if rate is None and self._cfg.rate_matching:
+            self._counters.rate_unmatched += 1
+        return w_n, a_n, rate
+
+    def update_master(self, live: LiveSolution, t_v: int, m: MasterSample, ref: Reference, ldv: LdvRecord,
+                      past: Past, extras: Extras | None, ldv_spacing_ns: int, master_spacing_ns: int) -> None:
+        """Velocity (+ attitude) match at t_v. The innovation is formed against the slave solution
+        at t_v; the error state is the live one (at live.t_ns), related to the one at t_v by the
+        transitions in between, x(t_ins) = Phi x(t_v) (process noise over the latency neglected),
+        so the measurement matrix is H Phi^-1 (identity at zero latency). The estimate is fed
+        back into the live solution, and the same correction into the stored past ones."""
+        r_vel = self._r_moving if ref.moving else self._r_parked
+        if ref.moving:
+            # an LDV slower than the master enters several matches with the same noise:
+            # weight it as one sample per LDV interval (variance times the matches per sample)
+            ratio = ldv_spacing_ns / master_spacing_ns if master_spacing_ns else 1.0
+            extra = ldv.var + (ratio - 1.0) * self._cfg.ldv_sigma_mps ** 2 if ratio > 1.0 else ldv.var
+            if extra > 0.0:
+                r_vel = r_vel + np.eye(3) * extra
+        nav, phi_acc = past
+        z_vel = nav.v_n - ref.v_ref
+        if self._lowpass is not None:
+            z_vel = self._lowpass.step(z_vel)
+        match = Match(c_m=ref.c_m, w_m=m.w_b, r=ref.r, u_n=ref.u_n, v_ref=ref.v_ref, z_vel=z_vel,
+                      r_vel=r_vel, ins=nav, c_nom=self.c_nom)
+        if extras is not None:
+            match.w_n, match.a_n, match.rate = extras
+        res = self.results
+        meas = self._model.measurement(match, res.corr)
+        kf = live.kf
+        if meas.h is None:
+            assert meas.hfun is not None
+            upd = cast(NonlinearFilter, kf).update_nonlinear(meas.z, meas.hfun, meas.r, self._gate)
+        else:
+            h = meas.h if phi_acc is None else solve(phi_acc.T, meas.h.T).T
+            upd = kf.update(meas.z, h, meas.r, self._gate)
+        check_health(kf.x, kf.P)
+        res.nis = upd.nis
+        if not upd.accepted:
+            self._counters.gated += 1
+            return
+        self._counters.updates += 1
+        x = kf.x
+        res.x = x.copy()
+        p = kf.P
+        # no later master match needs the solutions before t_v (a later Doppler sample may)
+        live.history.prune(min(t_v, live.t_ns - self._doppler_lat_ns), live.t_ns)
+        x_new, nav = self._feed_back(live, x, p, match, nav)
+        kf.x = x_new
+        res.mu, res.mu_sigma = self._model.misalignment(x_new, p, match, nav, res.corr)
+
+    def update_doppler(self, live: LiveSolution, t: int, s: DopplerSample, past: Past) -> None:
+        """Match the slave velocity to the radar's, resolved with the slave's own attitude, at the
+        radar's validity time (the slave solution there, H Phi^-1 as for the master)."""
+        nav, phi_acc = past
+        v_d = quat_to_dcm(nav.q_nb) @ s.v_b
+        r = np.eye(2) * s.sigma ** 2
+        meas = cast(_DopplerModel, self._model).doppler_measurement(nav.v_n, (nav.v_n - v_d)[0:2], r)
+        assert meas.h is not None
+        h = meas.h if phi_acc is None else solve(phi_acc.T, meas.h.T).T
+        kf = live.kf
+        upd = kf.update(meas.z, h, meas.r, self._gate)
+        check_health(kf.x, kf.P)
+        res = self.results
+        res.nis = upd.nis
+        if not upd.accepted:
+            self._counters.gated += 1
+            return
+        self._counters.doppler_updates += 1
+        x = kf.x
+        res.x = x.copy()
+        zero = np.zeros(3)
+        match = Match(c_m=np.eye(3), w_m=zero, r=zero, u_n=zero, v_ref=v_d, z_vel=zero, r_vel=np.eye(3), ins=nav)
+        kf.x, _ = self._feed_back(live, x, kf.P, match, nav)
+        res.t_doppler_update = t
+
+    def _feed_back(self, live: LiveSolution, x: np.ndarray, p: np.ndarray, match: Match, nav: NavState
+                   ) -> tuple[np.ndarray, NavState]:
+        """Apply the estimate to the live solution (the model's feedback) and the same correction
+        to the stored past ones; return the state the filter keeps and `nav` (the solution at the
+        match's validity time) corrected."""
+        st = live.ins.s
+        q0, v0, pos0 = st.q_nb, st.v_n, (st.lat, st.lon, st.h)
+        x_new = self._model.feedback(x, p, match, st, self.results.corr)
+        if self._lowpass is not None:
+            self._lowpass.shift(st.v_n - v0)
+        history = live.history
+        if history.items or nav is not st:
+            q_corr = quat_mul(st.q_nb, quat_conj(q0))
+            dv = st.v_n - v0
+            dpos = (st.lat - pos0[0], st.lon - pos0[1], st.h - pos0[2])
+            history.correct(q_corr, dv, *dpos)
+            if nav is not st:
+                q = quat_mul(q_corr, nav.q_nb)
+                nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + dv, lat=nav.lat + dpos[0],
+                               lon=nav.lon + dpos[1], h=nav.h + dpos[2])
+        return x_new, nav
