@@ -33,7 +33,7 @@ README_BLOCK_RE = re.compile(r'(<!-- results:(\S+) -->\n)(.*?)(<!-- /results:\2 
 STALE = 'results are stale: run scripts/results.sh'
 
 
-class StaleResults(AssertionError):
+class StaleResultsError(AssertionError):
     """The code no longer gives the numbers docs/results.md publishes."""
 
 
@@ -46,13 +46,14 @@ def recorded_digests(text: str) -> dict[str, str]:
 
 
 def check_fresh(name: str, runs_csv: Path, results_md: Path = RESULTS_MD) -> None:
-    """Raise StaleResults unless `runs_csv` (a quick run of `name`) is what results_md published."""
+    """Raise StaleResultsError unless `runs_csv` (a quick run of `name`) is what results_md published."""
     have = recorded_digests(results_md.read_text()) if results_md.exists() else {}
     if name not in have:
-        raise StaleResults(f'{STALE} ({name}: {results_md.name} records no quick digest)')
+        raise StaleResultsError(f'{STALE} ({name}: {results_md.name} records no quick digest)')
     got = digest(runs_csv)
     if have[name] != got:
-        raise StaleResults(f'{STALE} ({name}: {results_md.name} records {have[name][:12]}, the code gives {got[:12]})')
+        raise StaleResultsError(f'{STALE} ({name}: {results_md.name} records {have[name][:12]}, '
+                                f'the code gives {got[:12]})')
 
 
 def _sections(report_md: str) -> dict[str, str]:
@@ -83,7 +84,7 @@ def compact_table(report_md: str) -> str:
 
 
 def stamp(exp: Experiment, seeds: int, workers: int) -> str:
-    day = datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d')
+    day = datetime.datetime.now(datetime.UTC).strftime('%Y-%m-%d')
     return (f'commit `{code_version(ROOT)}`, {day}, `scripts/experiment.sh {exp.name} --seeds {seeds} '
             f'--workers {workers}`, {os.cpu_count()} cores')
 
