@@ -295,7 +295,7 @@ SEED003 = Experiment(
     cells=grid(case=[('nominal', {}), ('model_error', dict(SEED003_MODEL_ERROR))],
                filter=[(a, {'filter.algorithm': a}) for a in ('kf', 'fading_tested', 'carlson', 'combined')],
                precision=[('float64', {'filter.float32': False}), ('float32', {'filter.float32': True})]),
-    seeds=5,
+    seeds=3,
     score_at=300.0,
     settle_arcmin=(3.0, 3.0, 6.0),
     quantity='attitude',
