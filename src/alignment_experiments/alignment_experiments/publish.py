@@ -1,0 +1,171 @@
+"""`scripts/results.sh [NAME ...]`: run the catalogue's experiments at their documented seeds and
+publish their numbers: `docs/results.md` (every table and plot, stamped with the commit, the date,
+the command and the core count) and the README's result blocks, both taken from the experiments'
+own output files, never typed by hand.
+
+Freshness: `docs/results.md` records, per experiment, the SHA-256 of its quick version's
+`runs.csv` (the experiments are deterministic). The test suite re-runs the quick versions and
+calls `check_fresh`, which fails when the code no longer gives the published numbers.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime
+import hashlib
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from .catalogue import CATALOGUE, Experiment
+from .results import code_version
+
+ROOT = Path(os.environ.get('ALIGN_ROOT') or Path(__file__).resolve().parents[3])
+RESULTS_MD = ROOT / 'docs' / 'results.md'
+README = ROOT / 'README.md'
+IMG_DIR = ROOT / 'docs' / 'img' / 'results'
+OUT_DIR = ROOT / 'runs' / 'results'
+PLOTS = ('rms_by_cell.png', 'nees.png')          # + rms_vs_<sweep>.png; error_vs_time stays in the run dir
+DIGEST_RE = re.compile(r'<!-- quick-digest (\S+) sha256=([0-9a-f]{64}) -->')
+README_BLOCK_RE = re.compile(r'(<!-- results:(\S+) -->\n)(.*?)(<!-- /results:\2 -->)', re.S)
+STALE = 'results are stale: run scripts/results.sh'
+
+
+class StaleResultsError(AssertionError):
+    """The code no longer gives the numbers docs/results.md publishes."""
+
+
+def digest(runs_csv: Path) -> str:
+    return hashlib.sha256(runs_csv.read_bytes()).hexdigest()
+
+
+def recorded_digests(text: str) -> dict[str, str]:
+    return dict(DIGEST_RE.findall(text))
+
+
+def check_fresh(name: str, runs_csv: Path, results_md: Path = RESULTS_MD) -> None:
+    """Raise StaleResultsError unless `runs_csv` (a quick run of `name`) is what results_md published."""
+    have = recorded_digests(results_md.read_text()) if results_md.exists() else {}
+    if name not in have:
+        raise StaleResultsError(f'{STALE} ({name}: {results_md.name} records no quick digest)')
+    got = digest(runs_csv)
+    if have[name] != got:
+        raise StaleResultsError(f'{STALE} ({name}: {results_md.name} records {have[name][:12]}, '
+                                f'the code gives {got[:12]})')
+
+
+def _sections(report_md: str) -> dict[str, str]:
+    """'## Heading' -> its body, from an experiment's report.md."""
+    out: dict[str, str] = {}
+    for part in re.split(r'^## ', report_md, flags=re.M)[1:]:
+        head, _, body = part.partition('\n')
+        out[head.strip()] = body.strip('\n')
+    return out
+
+
+def _first_table(text: str) -> list[list[str]]:
+    rows = [ln for ln in text.splitlines() if ln.startswith('|')]
+    return [[c.strip() for c in ln.strip('|').split('|')] for ln in rows]
+
+
+def _table(rows: list[list[str]]) -> str:
+    return '\n'.join('| ' + ' | '.join(r) + ' |' for r in rows)
+
+
+def compact_table(report_md: str) -> str:
+    """The per-cell results table with the columns a README reader needs (cell values, RMS, mean 1σ,
+    NEES with its bounds)."""
+    rows = _first_table(_sections(report_md)['Results per cell'])
+    head = rows[0]
+    keep = [i for i, h in enumerate(head) if not h.startswith(('p95', 'in 2σ', 'mean NIS', 'settle'))]
+    return _table([[r[i] for i in keep] for r in rows])
+
+
+def stamp(exp: Experiment, seeds: int, workers: int) -> str:
+    day = datetime.datetime.now(datetime.UTC).strftime('%Y-%m-%d')
+    return (f'commit `{code_version(ROOT)}`, {day}, `scripts/experiment.sh {exp.name} --seeds {seeds} '
+            f'--workers {workers}`, {os.cpu_count()} cores')
+
+
+def section(exp: Experiment, out: Path, quick_out: Path, stamp_line: str) -> str:
+    """This experiment's part of docs/results.md (its plots copied to docs/img/results/)."""
+    rep = _sections((out / 'report.md').read_text())
+    md = [f'## {exp.title}', '', f'<a id="{exp.name}"></a>', exp.description, '', f'Made by {stamp_line}.', '',
+          rep['Results per cell']]
+    if 'Beside the paper' in rep:
+        md += ['', '### Beside the paper', '', rep['Beside the paper']]
+    if exp.notes:
+        md += ['', '### Reading', '', exp.notes]
+    IMG_DIR.mkdir(parents=True, exist_ok=True)
+    shown = [p for p in PLOTS + (f'rms_vs_{exp.sweep}.png',) if (out / p).exists()]
+    for p in shown:
+        shutil.copyfile(out / p, IMG_DIR / f'{exp.name}-{p}')
+    md += [''] + [f'![{exp.name}: {p[:-4]}](img/results/{exp.name}-{p})' for p in shown]
+    md += ['', f'<!-- quick-digest {exp.name} sha256={digest(quick_out / "runs.csv")} -->', '']
+    return '\n'.join(md)
+
+
+def readme_block(exp: Experiment, out: Path, stamp_line: str) -> str:
+    md = [compact_table((out / 'report.md').read_text()), '',
+          f'({exp.name}; made by {stamp_line}; all columns, the paper comparison and plots in '
+          f'[docs/results.md](docs/results.md#{exp.name}).)']
+    if exp.notes:
+        md += ['', exp.notes]
+    return '\n'.join(md) + '\n'
+
+
+def update_readme(text: str, blocks: dict[str, str]) -> str:
+    """Replace each `<!-- results:NAME -->` ... `<!-- /results:NAME -->` block whose NAME is in blocks."""
+    return README_BLOCK_RE.sub(lambda m: m.group(1) + blocks.get(m.group(2), m.group(3)) + m.group(4), text)
+
+
+def _run(args: list[str]) -> None:
+    cmd = [sys.executable, '-m', 'alignment_experiments', *args]
+    print('+', ' '.join(cmd[2:]), flush=True)
+    subprocess.run(cmd, check=True, cwd=ROOT)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog='results.sh', description=__doc__.split('\n\n')[0])
+    ap.add_argument('names', nargs='*', help='experiments to re-run (default: all); the others are rendered '
+                                             'from their last outputs in runs/results/')
+    ap.add_argument('--workers', type=int, default=2)
+    ap.add_argument('--render-only', action='store_true', help='do not run; render from runs/results/')
+    a = ap.parse_args(argv)
+    names = a.names or list(CATALOGUE.experiments)
+    for n in names:
+        CATALOGUE.get(n)
+    stamps_file = OUT_DIR / 'stamps.txt'
+    stamps = dict(ln.split('\t', 1) for ln in stamps_file.read_text().splitlines()) if stamps_file.exists() else {}
+    if not a.render_only:
+        for n in names:
+            exp = CATALOGUE.get(n)
+            _run([n, '--workers', str(a.workers), '--out', str(OUT_DIR / n)])
+            _run([n, '--quick', '--workers', str(a.workers), '--out', str(OUT_DIR / f'{n}_quick')])
+            stamps[n] = stamp(exp, exp.seeds, a.workers)
+        OUT_DIR.mkdir(parents=True, exist_ok=True)
+        stamps_file.write_text(''.join(f'{k}\t{v}\n' for k, v in stamps.items()))
+    missing = [n for n in CATALOGUE.experiments if n not in stamps or not (OUT_DIR / n / 'report.md').exists()]
+    if missing:
+        ap.error(f"no outputs for {', '.join(missing)}: run scripts/results.sh {' '.join(missing)}")
+    parts = ['# Results', '',
+             'Every table here is generated by `scripts/results.sh` from the experiments\' output files '
+             '(`runs/results/NAME/report.md`, `runs.csv`, plots) and stamped with the commit, date, command and core '
+             'count that made it. The test suite re-runs each experiment\'s quick version and fails when its '
+             '`runs.csv` no longer matches the digest recorded below it: a change that moves a number cannot land '
+             'with the old number here. Errors in arcmin; ROS FLU aircraft axes (roll = x, pitch = y, yaw = z) '
+             'unless the table says E/N/U. The papers are identified in [references.md](references.md).', '']
+    blocks = {}
+    for n, exp in CATALOGUE.experiments.items():
+        parts.append(section(exp, OUT_DIR / n, OUT_DIR / f'{n}_quick', stamps[n]))
+        blocks[n] = readme_block(exp, OUT_DIR / n, stamps[n])
+    RESULTS_MD.write_text('\n'.join(parts))
+    README.write_text(update_readme(README.read_text(), blocks))
+    print(f'wrote {RESULTS_MD.relative_to(ROOT)} and the README blocks of {len(blocks)} experiments')
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
