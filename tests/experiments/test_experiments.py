@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from alignment_core.config import scenario
-from alignment_experiments import monte_carlo, report, results
+from alignment_experiments import monte_carlo, publish, report, results
 from alignment_experiments.catalogue import CATALOGUE
 from alignment_experiments.cli import main
 
@@ -115,6 +115,7 @@ def test_quick_experiment_report(tmp_path, name):
             assert png.read_bytes()[:8] == PNG_MAGIC and png.stat().st_size > 5000
     summary = results.read_runs(out / 'summary.csv')
     assert len(summary) == 3 * len(exp.cells)
+    publish.check_fresh(name, out / 'runs.csv')       # docs/results.md publishes what this code gives
 
 
 def test_seed000_physics_in_the_report(tmp_path):

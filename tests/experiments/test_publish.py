@@ -1,0 +1,51 @@
+"""The results pipeline (alignment_experiments/publish.py): digests that catch stale numbers,
+README blocks replaced between their markers, the compact table taken from a report."""
+import pytest
+
+from alignment_experiments import publish
+
+REPORT = """# title
+
+## Results per cell
+
+intro
+
+| filter | RMS r/p/y | p95 r/p/y | mean 1σ r/p/y | in 2σ | NEES [95 %] | mean NIS | settle (s) |
+|---|---|---|---|---|---|---|---|
+| kf | 0.1/0.2/0.3 | 0.2/0.3/0.4 | 0.1/0.2/0.3 | 0.95/0.95/0.95 | 3.00 [2.36, 3.72] | 3.01 | 1/2/3 |
+
+## Plots
+"""
+
+
+def test_a_perturbed_digest_is_stale(tmp_path):
+    runs = tmp_path / 'runs.csv'
+    runs.write_text('run,cell\n0,a\n')
+    good = publish.digest(runs)
+    md = tmp_path / 'results.md'
+    md.write_text(f'text\n<!-- quick-digest exp sha256={good} -->\n')
+    publish.check_fresh('exp', runs, md)                     # the published numbers: fresh
+    bad = ('0' if good[0] != '0' else '1') + good[1:]
+    md.write_text(f'text\n<!-- quick-digest exp sha256={bad} -->\n')
+    with pytest.raises(publish.StaleResultsError, match='results are stale: run scripts/results.sh'):
+        publish.check_fresh('exp', runs, md)
+    runs.write_text('run,cell\n0,b\n')                        # the code moved a number
+    md.write_text(f'text\n<!-- quick-digest exp sha256={good} -->\n')
+    with pytest.raises(publish.StaleResultsError):
+        publish.check_fresh('exp', runs, md)
+    with pytest.raises(publish.StaleResultsError, match='records no quick digest'):
+        publish.check_fresh('other', runs, md)
+
+
+def test_readme_blocks_are_replaced_between_their_markers_only():
+    text = ('a\n<!-- results:x -->\nold x\n<!-- /results:x -->\nb\n'
+            '<!-- results:y -->\nold y\n<!-- /results:y -->\nc\n')
+    out = publish.update_readme(text, {'x': 'new x\n'})
+    assert out == ('a\n<!-- results:x -->\nnew x\n<!-- /results:x -->\nb\n'
+                   '<!-- results:y -->\nold y\n<!-- /results:y -->\nc\n')
+
+
+def test_compact_table_keeps_the_readers_columns():
+    rows = publish.compact_table(REPORT).splitlines()
+    assert rows[0] == '| filter | RMS r/p/y | mean 1σ r/p/y | NEES [95 %] |'
+    assert rows[2] == '| kf | 0.1/0.2/0.3 | 0.1/0.2/0.3 | 3.00 [2.36, 3.72] |'
