@@ -513,7 +513,7 @@ def test_player_publishes_every_message(tmp_path: Path, ros_context: Context) ->
         node.create_subscription(cls, topic, got[topic].append, STREAM)
     executor = SingleThreadedExecutor(context=ros_context)
     executor.add_node(node)
-    play = tool('player', str(bag), '--wait-subscribers', '/aircraft/imu=1', '/clock=1',
+    play = tool('player', str(bag), '-r', '0', '--lossless', '--wait-subscribers', '/aircraft/imu=1', '/clock=1',
                 '/alignment/state=1', '--wait-timeout', '10', '--stats', str(stats))
     deadline = time.monotonic() + 15
     try:
@@ -548,7 +548,7 @@ def test_player_truncated_bag_and_errors(tmp_path: Path, domain_id: int) -> None
     data = src.read_bytes()
     (cut / src.name).write_bytes(data[:int(0.6 * len(data))])
     stats = tmp_path / 'p.json'
-    res = subprocess.run([sys.executable, '-m', 'alignment_ros.player', str(cut), '--stats', str(stats)],
+    res = subprocess.run([sys.executable, '-m', 'alignment_ros.player', str(cut), '-r', '0', '--stats', str(stats)],
                          capture_output=True, text=True, timeout=15)
     assert res.returncode == 0, res.stderr
     st = json.loads(stats.read_text())
@@ -596,6 +596,5 @@ def test_echo_once_prints_yaml_doc(ros_context: Context) -> None:
 def test_echo_timeout_without_messages(domain_id: int) -> None:
     res = subprocess.run([sys.executable, '-m', 'alignment_ros.echo', '/aircraft/imu', '--timeout', '0.5'],
                          capture_output=True, text=True, timeout=15)
-    assert res.returncode == 1
-    assert res.stdout == ''
-    assert 'no message received' in res.stderr
+    assert res.returncode == 0             # ros2 topic echo: a timeout with nothing received is not an error
+    assert res.stdout == '' and res.stderr == ''
