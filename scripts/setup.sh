@@ -43,8 +43,8 @@ export LD_LIBRARY_PATH="$LIBS\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}"
 export _ROS_WHEELS_BOOTSTRAP_COMPLETE=1
 export RMW_IMPLEMENTATION=rmw_fastrtps_cpp
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
-# ROS_DOMAIN_ID: run_graph.sh, replay.sh and the tests claim a free one per run (see
-# alignment_ros/domain.py); set it yourself to echo a running graph's topics.
+# ROS_DOMAIN_ID: run_graph.sh and replay.sh use an exported one, else claim a free one and print
+# it (--domain-id wins; alignment_ros/domain.py); the tests always claim their own.
 export AMENT_PREFIX_PATH="$VENV\${AMENT_PREFIX_PATH:+:\$AMENT_PREFIX_PATH}"
 export PYTHONUNBUFFERED=1
 if [ -f "$ROOT/ros2_ws/install/setup.bash" ]; then

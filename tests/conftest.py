@@ -11,6 +11,10 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config/params/graph.yaml'
+# every test runs on a domain of its own (claimed, or given to its processes explicitly): a
+# ROS_DOMAIN_ID exported in the shell, which run_graph.sh and replay.sh honour, must not
+# put the suite's runs on one shared domain
+os.environ.pop('ROS_DOMAIN_ID', None)
 
 
 def _param_args(sets: dict) -> list[str]:

@@ -4,7 +4,9 @@ level or inside functions, absolute or relative):
 - layering: geometry, navigation and estimation never import the simulator (ship, aircraft,
   sensors, config, pipeline, evaluation); nor do the foundation modules (units, validation,
   gauss_markov, rng, samples); geometry imports neither navigation nor estimation, navigation
-  not estimation;
+  not estimation; air_data (atmosphere, pitot, ports, FADS solve: shared by the simulator and
+  the estimator, so geometry, navigation and estimation may import it) imports only units,
+  validation and geometry of the package, and numpy, scipy, ambiance and the standard library;
 - no import cycle among alignment_core's modules (a package's __init__ is a module);
 - alignment_core never imports rclpy, ROS message packages or the ROS glue.
 
@@ -14,6 +16,7 @@ something: it finds a violation, a cycle and a ROS import where there is one.
 from __future__ import annotations
 
 import ast
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,8 +30,11 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
     'geometry': SIMULATOR + ('navigation', 'estimation'),
     'navigation': SIMULATOR + ('estimation',),
     'estimation': SIMULATOR,
+    'air_data': SIMULATOR + ('navigation', 'estimation', 'gauss_markov', 'rng', 'samples'),
     **{name: SIMULATOR for name in FOUNDATION},
 }
+AIR_DATA_MAY_IMPORT = ('air_data', 'units', 'validation', 'geometry')
+AIR_DATA_THIRD_PARTY = ('numpy', 'scipy', 'ambiance')
 ROS_PACKAGES = {'rclpy', 'rcl_interfaces', 'builtin_interfaces', 'rosidl_runtime_py', 'rosbag2_py', 'launch',
                 'launch_ros', 'message_filters', 'tf2_ros', 'alignment_ros'}
 ROS_SUFFIXES = ('_msgs', '_srvs', '_interfaces', '_node')
@@ -182,6 +188,23 @@ def test_layering():
     assert not bad, _report('layering violations (see FORBIDDEN)', bad)
 
 
+def air_data_violations(imports: list[Import], package: str) -> list[Import]:
+    """Imports of air_data outside AIR_DATA_MAY_IMPORT, the standard library and AIR_DATA_THIRD_PARTY."""
+    def allowed(i: Import) -> bool:
+        top = i.target.split('.')[0]
+        if top == package:
+            return _component(i.target, package) in AIR_DATA_MAY_IMPORT
+        return top in sys.stdlib_module_names or top in AIR_DATA_THIRD_PARTY
+    return [i for i in imports if _component(i.module, package) == 'air_data' and not allowed(i)]
+
+
+def test_air_data_imports_only_its_layer_and_its_libraries():
+    _, imports = all_imports(CORE, PACKAGE)
+    assert len([i for i in imports if _component(i.module, PACKAGE) == 'air_data']) > 10
+    bad = air_data_violations(imports, PACKAGE)
+    assert not bad, _report('air_data imports outside its layer', bad)
+
+
 def test_no_import_cycle():
     modules, imports = all_imports(CORE, PACKAGE)
     cycles = import_cycles(modules, imports)
@@ -244,6 +267,15 @@ def test_checker_finds_layering_violations(tmp_path):
                    ('pkg.units', 'pkg.config.scenario')}
     msg = _report('layering violations', layering_violations(imports, 'pkg'))
     assert 'pkg.geometry.earth imports pkg.ship.motion (line 4)' in msg
+
+
+def test_checker_finds_air_data_imports_outside_its_layer(tmp_path):
+    files = dict(CLEAN)
+    files['air_data/ports.py'] = ('import math\nimport numpy as np\nfrom pkg.geometry.earth import g\n'
+                                  'import matplotlib\n\ndef f():\n    from pkg.navigation import strapdown\n')
+    _, imports = all_imports(_tree(tmp_path, files), 'pkg')
+    assert {(i.module, i.target) for i in air_data_violations(imports, 'pkg')} == {
+        ('pkg.air_data.ports', 'matplotlib'), ('pkg.air_data.ports', 'pkg.navigation.strapdown')}
 
 
 def test_checker_finds_cycles_through_functions_and_package_inits(tmp_path):

@@ -11,6 +11,7 @@ setup(
         ('share/' + package_name, ['package.xml']),
     ],
     install_requires=['setuptools'],
+    extras_require={'test': ['pytest']},    # colcon test runs pytest (setup.cfg)
     zip_safe=True,
     maintainer='Transfer alignment testbed',
     maintainer_email='dev@transfer-alignment.invalid',

@@ -11,6 +11,7 @@ setup(
         ('share/' + package_name, ['package.xml']),
     ],
     install_requires=['setuptools'],
+    extras_require={'test': ['pytest']},    # colcon test runs pytest (setup.cfg)
     zip_safe=True,
     maintainer='Transfer alignment testbed',
     maintainer_email='dev@transfer-alignment.invalid',
@@ -20,7 +21,8 @@ setup(
         'console_scripts': [
             'recorder = alignment_ros.recorder:main',
             'player = alignment_ros.player:main',
-            'echo = alignment_ros.echo:main'
+            'echo = alignment_ros.echo:main',
+            'bag_info = alignment_ros.bag_info:main',
         ],
     },
 )

@@ -28,6 +28,8 @@ def graph_run(tmp_path_factory) -> Path:
         cmd += ['--set', s]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     first = p.stdout.readline()
+    while first.startswith('setup.sh:'):          # a workspace rebuild after a package file changed
+        first = p.stdout.readline()
     assert first.startswith('ROS_DOMAIN_ID='), first + p.stderr.read()
     dom = first.split()[0].split('=')[1]
     echo = subprocess.run([str(ROOT / 'scripts/echo.sh'), '/alignment/misalignment', '--once',

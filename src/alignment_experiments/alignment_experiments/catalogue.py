@@ -168,6 +168,16 @@ CATAPULT_GOAL = Experiment(
     series='filter',
     quick_base=(),
     quick_cells=2,
+    notes=(
+        "The goal holds for every filter with a factor of 4 to 14: what gets there is the increment IMU (no "
+        "aliasing), the scenario's known-event launch noise (the vibration's net velocity, released where it "
+        "happens) and a launch detector that one noisy LDV sample cannot fool. With 5 s on the deck the "
+        "filters are indistinguishable but for the strong tracking pair, a little conservative; with 60 s the "
+        "Kalman family (KF, Carlson, UD) and the tested fading filters reach the same errors with an honest "
+        "sigma (NEES inside its bounds), while the strong tracking filters (capped at 1.2 per step in this "
+        "scenario) stay on the conservative side (NEES near its lower bound) and about 2x worse in pitch: their "
+        "fading factor answers the stroke's "
+        "innovations, which the launch noise already explains."),
 )
 
 CATAPULT_REALISTIC = Experiment(
@@ -191,6 +201,12 @@ CATAPULT_REALISTIC = Experiment(
     series='filter',
     quick_base=(('duration_s', 20.0), ('aircraft.catapult.launch_time_s', 12.0)),
     quick_cells=2,
+    notes=(
+        "Under a spectral sea state 5 with a 100 m arm, deck flexure (not modelled by vm15; scored against "
+        "the true mounting plus flexure) and the vibration as real airframe motion, every filter stays "
+        "consistent (NEES inside its bounds) at a few tenths of an arcminute; roll is the weakest axis. The "
+        "Kalman family and the tested fading filters agree; the strong tracking filters report a roll sigma "
+        "more than twice their error (conservative) for no gain."),
 )
 
 DECK_GOAL = Experiment(

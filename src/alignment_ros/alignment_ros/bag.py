@@ -1,9 +1,12 @@
-"""rosbag2 MCAP bags: writing with ``rosbags``, reading with ``mcap`` (tolerant of truncation).
+"""rosbag2 MCAP bags: the reader, and the public names of writing (:mod:`bag_writer`).
 
-Bags are standard rosbag2 v9 MCAP bags (``metadata.yaml`` + one ``.mcap``, ``ros2`` profile,
-``ros2msg`` schemas from the Jazzy typestore with correct RIHS01 type hashes, ``cdr``
-encoding), so ``ros2 bag play``, Foxglove and PlotJuggler open them. This module does not
-import rclpy.
+Bags are rosbag2 Jazzy MCAP bags (``metadata.yaml`` + ``NAME_0.mcap`` [``NAME_1.mcap`` ...],
+``ros2`` profile, ``ros2msg`` schemas with the installed definitions, RIHS01 type hashes,
+``cdr`` encoding, messages in log-time order), so ``ros2 bag``, Foxglove and PlotJuggler open
+them. :class:`BagReader` reads this project's bags and any rosbag2 MCAP bag: split
+(``relative_file_paths``), compressed (``compression_mode`` FILE: ``.mcap.zstd`` files;
+MESSAGE: zstd message payloads; zstd/lz4 chunks), without metadata.yaml (the files' summaries
+and ``rosbag2`` metadata records), or truncated. This module does not import rclpy.
 
 Log time
 --------
@@ -15,63 +18,39 @@ the recorder stores **simulation time** instead:
 2. the clock value itself for ``rosgraph_msgs/Clock`` (any type whose first field is a
    ``builtin_interfaces/Time``);
 3. otherwise (e.g. ``std_msgs/Float64MultiArray``) the latest simulation time the recorder
-   knows: the largest ``/clock`` value received so far, or, before any ``/clock``, the largest
-   stamp seen on any topic (0 if nothing was seen yet).
+   knows: the largest ``/clock`` value received so far (with ``--use-sim-time`` and no
+   ``/clock`` recorded: the recorder node's ROS clock), or, before that, the largest stamp
+   seen on any topic (0 if nothing was seen yet).
 
 Both stamp kinds sit at the same place in the CDR bytes (right after the 4-byte encapsulation
 header: ``int32 sec``, ``uint32 nanosec``), so :func:`stamp_reader` reads them with one
-``struct.unpack_from`` and no deserialisation. Because log time is a stamp, messages are not
-written in log-time order (topics arrive interleaved); readers here and rosbag2's own player
-order by log time.
+``struct.unpack_from`` and no deserialisation. Because log time is a stamp, messages arrive out
+of log-time order; the writer sorts them when it closes the bag (see :mod:`bag_writer`).
 """
 from __future__ import annotations
 
 import heapq
 import logging
+import re
 import struct
+import tempfile
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any, NamedTuple
 
-import yaml
+import zstandard
 from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
-from rosbags.interfaces import (
-    Qos,
-    QosDurability,
-    QosHistory,
-    QosLiveliness,
-    QosReliability,
-    QosTime,
-)
-from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
-from rosbags.typesys import Stores, get_typestore
+
+from alignment_ros import msg_definitions
+from alignment_ros.bag_metadata import STREAM_QOS, BagError, BagMetadata, TopicInfo, from_yaml, parse_qos
+from alignment_ros.bag_writer import MCAP_MAGIC, NO_MESSAGE_TIME, SPOOL_SUFFIX, BagWriter
+from alignment_ros.mcap_salvage import Salvage
+
+__all__ = ['STREAM_QOS', 'BagError', 'BagMessage', 'BagReader', 'BagWriter', 'read_bag',
+           'stamp_reader', 'topic_counts']
 
 log = logging.getLogger(__name__)
-
-MCAP_MAGIC = b'\x89MCAP0\r\n'
-HEADER_TYPES = ('std_msgs/msg/Header', 'std_msgs/Header')
-TIME_TYPES = ('builtin_interfaces/msg/Time', 'builtin_interfaces/Time')
-
-_INFINITE = QosTime(9223372036, 854775807)  # rmw's "infinite" duration, as rosbag2 writes it
-STREAM_QOS = Qos(
-    history=QosHistory.KEEP_ALL,
-    depth=0,
-    reliability=QosReliability.RELIABLE,
-    durability=QosDurability.VOLATILE,
-    deadline=_INFINITE,
-    lifespan=_INFINITE,
-    liveliness=QosLiveliness.AUTOMATIC,
-    liveliness_lease_duration=_INFINITE,
-    avoid_ros_namespace_conventions=False,
-)
-"""Offered QoS stored in metadata.yaml (alignment_ros.qos.STREAM): ros2 bag play reuses it."""
-
-_TYPESTORE = None
-
-
-class BagError(Exception):
-    """A path that is not a readable rosbag2 MCAP bag, or a misuse of :class:`BagWriter`."""
 
 
 class BagMessage(NamedTuple):
@@ -81,14 +60,6 @@ class BagMessage(NamedTuple):
     type_name: str
     t_ns: int
     data: bytes
-
-
-def typestore() -> Any:
-    """Return the (cached) rosbags typestore for ROS 2 Jazzy."""
-    global _TYPESTORE
-    if _TYPESTORE is None:
-        _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
-    return _TYPESTORE
 
 
 # --- log time -------------------------------------------------------------------------------
@@ -101,204 +72,61 @@ def _cdr_time_ns(data: bytes | memoryview) -> int:
 
 
 def stamp_reader(type_name: str) -> Callable[[bytes | memoryview], int] | None:
-    """Return a function reading the stamp (ns) from CDR bytes, or None if the type has none.
-
-    Types whose first field is ``std_msgs/Header`` (stamp) or ``builtin_interfaces/Time``
-    (``rosgraph_msgs/Clock``) have a stamp.
-    """
-    try:
-        fields = typestore().fielddefs[type_name][1]
-    except KeyError as exc:
-        raise BagError(f'unknown message type {type_name!r} (not in the ROS 2 Jazzy typestore)') from exc
-    if not fields:
-        return None
-    spec = fields[0][1][1]
-    if isinstance(spec, str) and spec in HEADER_TYPES + TIME_TYPES:
-        return _cdr_time_ns
-    return None
+    """Return a function reading the stamp (ns) from CDR bytes, or None if the type has none
+    (its installed .msg's first field is neither a ``std_msgs/Header`` nor a
+    ``builtin_interfaces/Time``, or no .msg is installed)."""
+    return _cdr_time_ns if msg_definitions.has_stamp(type_name) else None
 
 
-# --- writing --------------------------------------------------------------------------------
+# --- which files ----------------------------------------------------------------------------
 
-class BagWriter:
-    """Write raw CDR messages to a new rosbag2 v9 MCAP bag directory.
+def _natural(p: Path) -> tuple:
+    return tuple(int(s) if s.isdigit() else s for s in re.split(r'(\d+)', p.name))
 
-    Use as a context manager or call :meth:`close`: closing writes the MCAP summary and
-    ``metadata.yaml``. Without :meth:`close` the bag is truncated (see :class:`BagReader`).
-    """
 
-    def __init__(self, path: str | Path, *, offered_qos: Qos | None = STREAM_QOS) -> None:
-        self.path = Path(path)
+def _mcap_files(path: Path) -> list[Path]:
+    return sorted([*path.glob('*.mcap'), *path.glob('*.mcap.zstd')], key=_natural)
+
+
+def _bag_files(path: Path) -> tuple[list[Path], BagMetadata | None]:
+    """The bag's files and its metadata.yaml (None if absent); BagError if not a bag."""
+    if not path.exists():
+        raise BagError(f'{path}: no such bag (path does not exist)')
+    if path.is_file():
+        if not path.name.endswith(('.mcap', '.mcap.zstd')):
+            raise BagError(f'{path}: not a rosbag2 bag (expected a bag directory or a .mcap file)')
+        return [path], None
+    meta_file = path / 'metadata.yaml'
+    meta = None
+    if meta_file.is_file():
         try:
-            self._writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
-            self._writer.open()
-        except WriterError as exc:
-            raise BagError(str(exc)) from exc
-        self._qos = [offered_qos] if offered_qos is not None else []
-        self._connections: dict[str, Any] = {}
-        self.counts: dict[str, int] = {}
-
-    def add_topic(self, topic: str, type_name: str) -> None:
-        """Register a topic with its ROS type name ('pkg/msg/Type'); idempotent for same type."""
-        if topic in self._connections:
-            if self._connections[topic].msgtype != type_name:
-                raise BagError(f'topic {topic} already added with type {self._connections[topic].msgtype}')
-            return
-        if type_name not in typestore().fielddefs:
-            raise BagError(f'unknown message type {type_name!r} (not in the ROS 2 Jazzy typestore)')
-        self._connections[topic] = self._writer.add_connection(
-            topic, type_name, typestore=typestore(), offered_qos_profiles=self._qos)
-        self.counts[topic] = 0
-
-    def write(self, topic: str, data: bytes | memoryview, t_ns: int) -> None:
-        """Append one serialized (CDR) message with log time ``t_ns`` (nanoseconds)."""
-        conn = self._connections.get(topic)
-        if conn is None:
-            raise BagError(f'topic {topic} was not added to the bag')
-        self._writer.write(conn, t_ns, data)
-        self.counts[topic] += 1
-
-    def close(self) -> None:
-        """Finish the MCAP file and write metadata.yaml (idempotent)."""
-        if self._writer.storage is not None:
-            self._writer.close()
-
-    def __enter__(self) -> BagWriter:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+            meta = from_yaml(meta_file.read_text())
+        except BagError as exc:
+            log.warning('%s: %s; using the .mcap files found', path, exc)
+        if meta is not None and meta.storage_identifier != 'mcap':
+            raise BagError(f'{path}: storage {meta.storage_identifier!r} is not supported (only mcap)')
+    if meta is not None:
+        files = [path / p for p in meta.relative_file_paths]
+        missing = [f for f in files if not f.is_file()]
+        if missing:
+            log.warning('%s: files listed in metadata.yaml are missing: %s', path, missing)
+        files = [f for f in files if f.is_file()] or _mcap_files(path)
+    else:
+        spools = sorted(path.glob('*' + SPOOL_SUFFIX))
+        files = spools or _mcap_files(path)
+        if files:
+            log.warning('%s: no metadata.yaml (%s); reading %s', path,
+                        'recording not finalised' if spools else 'recording not closed cleanly?',
+                        ', '.join(f.name for f in files))
+    if not files:
+        raise BagError(f'{path}: not a rosbag2 MCAP bag (no metadata.yaml and no .mcap file)')
+    return files, meta
 
 
 # --- reading --------------------------------------------------------------------------------
 
-def _bag_files(path: Path) -> tuple[list[Path], bool]:
-    """Return the bag's .mcap files and whether metadata.yaml exists; BagError if not a bag."""
-    if not path.exists():
-        raise BagError(f'{path}: no such bag (path does not exist)')
-    if path.is_file():
-        if path.suffix != '.mcap':
-            raise BagError(f'{path}: not a rosbag2 bag (expected a bag directory or a .mcap file)')
-        return [path], False
-    meta = path / 'metadata.yaml'
-    if meta.is_file():
-        try:
-            info = yaml.safe_load(meta.read_text())['rosbag2_bagfile_information']
-            storage = info.get('storage_identifier')
-            if storage != 'mcap':
-                raise BagError(f'{path}: storage {storage!r} is not supported (only mcap)')
-            files = [path / p for p in info['relative_file_paths']]
-        except (yaml.YAMLError, KeyError, TypeError) as exc:
-            log.warning('%s: unreadable metadata.yaml (%s); using the .mcap files found', path, exc)
-            files = sorted(path.glob('*.mcap'))
-        missing = [f for f in files if not f.is_file()]
-        if missing:
-            log.warning('%s: files listed in metadata.yaml are missing: %s', path, missing)
-            files = [f for f in files if f.is_file()]
-        if files:
-            return files, True
-    files = sorted(path.glob('*.mcap'))
-    if not files:
-        raise BagError(f'{path}: not a rosbag2 MCAP bag (no metadata.yaml and no .mcap file)')
-    if meta.is_file():
-        return files, True
-    log.warning('%s: no metadata.yaml (recording not closed cleanly?); reading %s',
-                path, ', '.join(f.name for f in files))
-    return files, False
-
-
-class _Salvage:
-    """Linear scan of a (possibly truncated) MCAP file that keeps every complete message.
-
-    Used when the file has no valid footer/summary. Uncompressed chunks cut in the middle still
-    yield their complete messages; a cut compressed chunk is lost as a whole.
-    """
-
-    def __init__(self, buf: bytes) -> None:
-        self.buf = memoryview(buf)
-        self.schemas: dict[int, str] = {}
-        self.channels: dict[int, tuple[str, int]] = {}
-        self.messages: list[tuple[int, int, int, bytes]] = []  # (log_time, seq, channel, data)
-        self.complete = False
-        self.good_end = 8  # end offset of the last complete record (top-level buffer)
-
-    @staticmethod
-    def _str(buf: memoryview, pos: int) -> tuple[str, int]:
-        (n,) = struct.unpack_from('<I', buf, pos)
-        return bytes(buf[pos + 4:pos + 4 + n]).decode(), pos + 4 + n
-
-    def scan(self, start: int, end: int) -> bool:
-        """Scan records in buf[start:end]; return True if the range ended on a record boundary."""
-        buf = self.buf
-        pos = start
-        while pos < end:
-            if pos + 9 > end:
-                return False
-            op = buf[pos]
-            (length,) = struct.unpack_from('<Q', buf, pos + 1)
-            body, body_end = pos + 9, pos + 9 + length
-            if body_end > end:
-                if op == 0x06:  # partial chunk: salvage if uncompressed
-                    self._chunk(body, end, partial=True)
-                return False
-            if op == 0x03:  # Schema
-                (sid,) = struct.unpack_from('<H', buf, body)
-                name, _ = self._str(buf, body + 2)
-                self.schemas[sid] = name
-            elif op == 0x04:  # Channel
-                cid, sid = struct.unpack_from('<HH', buf, body)
-                topic, _ = self._str(buf, body + 4)
-                self.channels[cid] = (topic, sid)
-            elif op == 0x05:  # Message
-                cid, _seq, log_time = struct.unpack_from('<HIQ', buf, body)
-                data = bytes(buf[body + 22:body_end])
-                self.messages.append((log_time, len(self.messages), cid, data))
-            elif op == 0x06:
-                self._chunk(body, body_end, partial=False)
-            elif op == 0x02:  # Footer
-                self.complete = True
-                self.good_end = body_end
-                return True
-            self.good_end = max(self.good_end, body_end)
-            pos = body_end
-        return True
-
-    def _chunk(self, body: int, end: int, *, partial: bool) -> None:
-        buf = self.buf
-        if body + 32 > end:
-            return
-        compression, pos = self._str(buf, body + 28)
-        if pos + 8 > end:
-            return
-        (n,) = struct.unpack_from('<Q', buf, pos)
-        rec_start = pos + 8
-        rec_end = min(rec_start + n, end)
-        if not compression:
-            self.scan(rec_start, rec_end)
-            return
-        if partial:
-            return
-        raw = bytes(buf[rec_start:rec_end])
-        try:
-            if compression == 'zstd':
-                import zstandard
-                (size,) = struct.unpack_from('<Q', buf, body + 16)
-                raw = zstandard.ZstdDecompressor().decompress(raw, max_output_size=size)
-            elif compression == 'lz4':
-                import lz4.frame
-                raw = lz4.frame.decompress(raw)
-            else:
-                raise ValueError(f'unsupported compression {compression!r}')
-        except Exception as exc:  # noqa: BLE001  (decompressors raise their own error types)
-            log.warning('MCAP chunk skipped: %s', exc)
-            return
-        inner = _Salvage(raw)
-        inner.schemas, inner.channels, inner.messages = self.schemas, self.channels, self.messages
-        inner.scan(0, len(raw))
-
-
 class BagReader:
-    """Read a rosbag2 MCAP bag: topics and types, counts, messages in log-time order.
+    """Read a rosbag2 MCAP bag: topics and types, counts, messages in log-time order, metadata.
 
     Intact files are read through their MCAP index. A file without a valid summary (recording
     killed, copy cut short) is scanned linearly and everything complete is kept: a warning
@@ -307,34 +135,69 @@ class BagReader:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        self.files, self.has_metadata = _bag_files(self.path)
+        self.files, self.bag_metadata = _bag_files(self.path)
+        self.has_metadata = self.bag_metadata is not None
         self.truncated = False
-        self._salvaged: dict[Path, _Salvage] = {}
+        self._tmp: tempfile.TemporaryDirectory | None = None
+        self._readable: dict[Path, Path] = {}
+        self._salvaged: dict[Path, Salvage] = {}
         self._summaries: dict[Path, Any] = {}
+        self._records: dict[Path, BagMetadata] = {}
         for f in self.files:
             self._open(f)
+        mode = self.bag_metadata.compression_mode if self.bag_metadata else next(
+            (r.compression_mode for r in self._records.values()), '')
+        self.compression_mode = mode.upper()
+        self._unzstd = zstandard.ZstdDecompressor()
+
+    def _decompressed(self, f: Path) -> Path:
+        """A .mcap.zstd file decompressed into a temporary directory (a cut file: its prefix)."""
+        if self._tmp is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix='bag-')
+        out = Path(self._tmp.name) / f.name[:-len('.zstd')]
+        with f.open('rb') as fin, out.open('wb') as fout:
+            try:
+                self._unzstd_stream(fin, fout)
+            except zstandard.ZstdError as exc:
+                log.warning('%s: zstd stream cut short (%s); reading what it holds', f, exc)
+        return out
+
+    @staticmethod
+    def _unzstd_stream(fin: Any, fout: Any) -> None:
+        reader = zstandard.ZstdDecompressor().stream_reader(fin, read_across_frames=True)
+        while chunk := reader.read(1 << 20):
+            fout.write(chunk)
 
     def _open(self, f: Path) -> None:
-        with f.open('rb') as fh:
+        path = self._decompressed(f) if f.name.endswith('.zstd') else f
+        self._readable[f] = path
+        with path.open('rb') as fh:
             magic = fh.read(8)
             if magic != MCAP_MAGIC:
                 if MCAP_MAGIC.startswith(magic):  # cut before the end of the magic: empty
                     self.truncated = True
-                    self._salvaged[f] = _Salvage(b'')
+                    self._salvaged[f] = Salvage(b'')
                     log.warning('%s: truncated MCAP file (%d bytes): no message readable',
                                 f, len(magic))
                     return
                 raise BagError(f'{f}: not an MCAP file (bad magic)')
             try:
                 fh.seek(0)
-                summary = SeekingReader(fh).get_summary()
+                reader = SeekingReader(fh)
+                summary = reader.get_summary()
                 if summary is None:
                     raise McapError('no summary section')
                 self._summaries[f] = summary
+                for rec in reader.iter_metadata():
+                    if rec.name == 'rosbag2' and rec.metadata.get('serialized_metadata'):
+                        self._records[f] = from_yaml(rec.metadata['serialized_metadata'])
+                return
+            except BagError as exc:
+                log.warning('%s: rosbag2 metadata record ignored: %s', f, exc)
                 return
             except (McapError, OSError, ValueError, struct.error) as exc:
                 reason = f'no valid footer/summary: {type(exc).__name__}'
-        sal = _Salvage(f.read_bytes())
+        sal = Salvage(path.read_bytes())
         sal.scan(8, len(sal.buf))
         self._salvaged[f] = sal
         if not sal.complete:
@@ -346,16 +209,19 @@ class BagReader:
         else:
             log.warning('%s: MCAP file without usable index (%s); read linearly', f, reason)
 
-    def topics(self) -> dict[str, str]:
-        """Return {topic: type name} of every channel in the bag."""
-        out: dict[str, str] = {}
+    def _channels(self) -> Iterator[tuple[str, str, str, dict[str, str]]]:
+        """(topic, type, message encoding, channel metadata) of every channel, file by file."""
         for s in self._summaries.values():
             for ch in s.channels.values():
-                out[ch.topic] = s.schemas[ch.schema_id].name if ch.schema_id else ''
+                schema = s.schemas.get(ch.schema_id)
+                yield ch.topic, schema.name if schema else '', ch.message_encoding, ch.metadata
         for sal in self._salvaged.values():
             for topic, sid in sal.channels.values():
-                out[topic] = sal.schemas.get(sid, '')
-        return out
+                yield topic, sal.schemas.get(sid, ''), 'cdr', {}
+
+    def topics(self) -> dict[str, str]:
+        """Return {topic: type name} of every channel in the bag."""
+        return {topic: type_name for topic, type_name, _, _ in self._channels()}
 
     def counts(self) -> dict[str, int]:
         """Return {topic: message count} (0 for channels without messages)."""
@@ -373,28 +239,70 @@ class BagReader:
         return out
 
     def _iter_file(self, f: Path, topics: set[str] | None) -> Iterator[BagMessage]:
+        unpack = self._unzstd.decompress if self.compression_mode == 'MESSAGE' else bytes
         if f in self._summaries:
-            with f.open('rb') as fh:
+            with self._readable[f].open('rb') as fh:
                 reader = SeekingReader(fh)
                 for schema, channel, msg in reader.iter_messages(
                         topics=list(topics) if topics is not None else None, log_time_order=True):
-                    yield BagMessage(channel.topic, schema.name if schema else '', msg.log_time, msg.data)
+                    yield BagMessage(channel.topic, schema.name if schema else '', msg.log_time,
+                                     unpack(msg.data))
             return
         sal = self._salvaged[f]
         chans = {cid: (t, sal.schemas.get(sid, '')) for cid, (t, sid) in sal.channels.items()}
         for log_time, _, cid, data in sorted(sal.messages, key=lambda m: (m[0], m[1])):
             topic, type_name = chans[cid]
             if topics is None or topic in topics:
-                yield BagMessage(topic, type_name, log_time, data)
+                yield BagMessage(topic, type_name, log_time, unpack(data))
 
     def messages(self, topics: Iterable[str] | None = None) -> Iterator[BagMessage]:
-        """Yield (topic, type_name, t_ns, data) in log-time order, optionally only ``topics``."""
+        """Yield (topic, type_name, t_ns, data) in log-time order, optionally only ``topics``;
+        message-compressed payloads come decompressed."""
         sel = set(topics) if topics is not None else None
         its = [self._iter_file(f, sel) for f in self.files]
         if len(its) == 1:
             yield from its[0]
         else:
             yield from heapq.merge(*its, key=lambda m: m.t_ns)
+
+    def _time_range(self) -> tuple[int, int] | None:
+        spans = [(s.statistics.message_start_time, s.statistics.message_end_time)
+                 for s in self._summaries.values() if s.statistics and s.statistics.message_count]
+        spans += [(min(m[0] for m in sal.messages), max(m[0] for m in sal.messages))
+                  for sal in self._salvaged.values() if sal.messages]
+        return (min(a for a, _ in spans), max(b for _, b in spans)) if spans else None
+
+    def metadata(self) -> BagMetadata:
+        """What ``ros2 bag info`` shows: metadata.yaml when the bag has one (bag size: the
+        directory's files), else built from the MCAP files as rosbag2's MCAP storage does
+        (its ``rosbag2`` record, overridden by the summary statistics and channels)."""
+        if self.bag_metadata is not None:
+            meta = self.bag_metadata
+            meta.bag_size = sum(p.stat().st_size for p in self.path.iterdir() if p.is_file())
+            return meta
+        rec = next(iter(self._records.values()), None)
+        meta = BagMetadata(version=rec.version, compression_format=rec.compression_format,
+                           compression_mode=rec.compression_mode, files=rec.files,
+                           custom_data=rec.custom_data, ros_distro=rec.ros_distro) \
+            if rec else BagMetadata(version=8, ros_distro='')
+        meta.bag_size = sum(f.stat().st_size for f in self.files)
+        meta.relative_file_paths = [str(self.path)] if self.path.is_file() else \
+            [f.name for f in self.files]
+        counts = self.counts()
+        meta.message_count = sum(counts.values())
+        span = self._time_range()
+        meta.starting_time_ns, end = span if span else (0, 0)
+        meta.duration_ns = end - meta.starting_time_ns
+        seen: dict[str, TopicInfo] = {}
+        for topic, type_name, encoding, md in self._channels():
+            if topic not in seen:
+                seen[topic] = TopicInfo(topic, type_name, encoding,
+                                        parse_qos(md.get('offered_qos_profiles', '')),
+                                        md.get('topic_type_hash', ''), counts.get(topic, 0))
+        meta.topics = list(seen.values())
+        if meta.starting_time_ns == NO_MESSAGE_TIME:
+            meta.starting_time_ns = 0
+        return meta
 
 
 def read_bag(path: str | Path, topics: Iterable[str] | None = None) -> Iterator[BagMessage]:

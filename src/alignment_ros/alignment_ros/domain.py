@@ -2,18 +2,21 @@
 
 A run claims a domain by holding an exclusive lock on /tmp/alignment_ros_domains/<id>.lock for
 its lifetime (released automatically when the process exits, even when killed), so parallel
-graph runs, replays and tests never hear each other. Domains 1..101 (valid for Fast DDS with
-default ports on Linux) are tried in a random order.
+graph runs, replays and tests never hear each other. Which domain (`for_run`): the one asked
+for (--domain-id), else an exported ROS_DOMAIN_ID, else a free one of 1..101 (valid for Fast
+DDS with default ports on Linux), tried in a random order.
 """
 from __future__ import annotations
 
 import fcntl
 import os
 import random
+import re
 from pathlib import Path
 
 LOCK_DIR = Path(os.environ.get('ALIGN_DOMAIN_LOCKS', '/tmp/alignment_ros_domains'))
 DOMAINS = tuple(range(1, 102))
+MAX_DOMAIN = 232    # rmw's limit on any platform (Fast DDS port arithmetic)
 
 _held: dict[int, object] = {}
 
@@ -28,6 +31,8 @@ def claim(preferred: int | None = None) -> int:
         order.insert(0, preferred)
     for dom in order:
         if dom in _held:
+            if dom == preferred:
+                raise RuntimeError(f'ROS domain {dom} is already claimed by this process')
             continue
         f = open(LOCK_DIR / f'{dom}.lock', 'w')
         try:
@@ -46,3 +51,26 @@ def release(dom: int) -> None:
     f = _held.pop(dom, None)
     if f is not None:
         f.close()
+
+
+def from_environment() -> int | None:
+    """ROS_DOMAIN_ID as rcl reads it (unset or empty: none); a value rcl would refuse is an error."""
+    text = os.environ.get('ROS_DOMAIN_ID', '').strip()
+    if not text:
+        return None
+    if not re.fullmatch('[0-9]+', text) or int(text) > MAX_DOMAIN:
+        raise RuntimeError(f'ROS_DOMAIN_ID={text!r} is not a domain id (an integer in 0..{MAX_DOMAIN})')
+    return int(text)
+
+
+def for_run(given: int | None) -> int:
+    """The domain of a run, claimed: `given` (--domain-id) if not None, else ROS_DOMAIN_ID if
+    exported, else a free one. A domain asked for that another run of this project holds is
+    refused (two graphs on one domain would exchange messages)."""
+    wanted = given if given is not None else from_environment()
+    try:
+        return claim(wanted)
+    except RuntimeError as e:
+        if given is None and wanted is not None:
+            raise RuntimeError(f'{e} (ROS_DOMAIN_ID is exported: unset it to get a free domain)') from None
+        raise

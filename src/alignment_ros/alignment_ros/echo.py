@@ -1,11 +1,22 @@
-"""``echo TOPIC``: print a topic's messages like ``ros2 topic echo`` (ros2cli is not available).
+"""``echo TOPIC [TYPE]``: ``ros2 topic echo`` (Jazzy) for this testbed, where ros2cli is absent.
 
-Output is byte-for-byte ros2's: each message as a YAML document followed by a ``---`` line
-(arrays, bytes and strings truncated to 128 elements unless ``--full-length``), or with
-``--csv`` one comma-separated row per message (``--csv-header`` adds a column-name line first,
-which ros2 does not print). Exit status: 0 after ``--once``/``--count``/Ctrl-C or when
-``--timeout`` (a total run time) ends after at least one message; 1 if ``--timeout`` ends
-with nothing received or the type cannot be determined.
+Same arguments, defaults, output and exit status as ``ros2 topic echo``: each message as a YAML
+document and a ``---`` line (or one ``--csv`` row), arrays/bytes/strings truncated to
+``--truncate-length`` (128) unless ``--full-length``; ``--field a.b``, ``--filter EXPR`` (on
+``m``), ``--no-arr``, ``--no-str``, ``--flow-style``, ``--raw`` (the serialized bytes as
+Python prints them), ``-i``, ``--once``, ``--timeout``; subscription QoS: the ``sensor_data``
+preset (KEEP_LAST 5) made RELIABLE / TRANSIENT_LOCAL when every publisher offers it, or as the
+``--qos-*`` options set it. Without TYPE the topic's type comes from the graph, looked up once
+after ``--spin-time`` (0.5 s): an unknown topic fails then.
+
+Exit status: 0 after ``--once``, ``--timeout`` (received or not) or a closed pipe; 1 when the
+type cannot be determined or is invalid, or the field/filter is invalid; 2 for a usage error;
+15 after SIGINT/SIGTERM (ros2: rclpy's shutdown on the signal ends its spin).
+
+Extensions of this project: the topic contract (alignment_ros.topics) gives the type of the
+graph's own topics, so echo can start before their publisher (which is then expected to offer
+RELIABLE, VOLATILE); ``--count N`` stops after N messages; ``--csv-header`` prints column names
+before the first CSV row.
 """
 from __future__ import annotations
 
@@ -17,102 +28,195 @@ import time
 from typing import Any
 
 import rclpy
+import yaml
+from rclpy.event_handler import SubscriptionEventCallbacks, UnsupportedEventTypeError
+from rclpy.exceptions import InvalidTopicNameException
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.expand_topic_name import expand_topic_name
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSDurabilityPolicy, QoSProfile, QoSReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
-from rclpy.utilities import remove_ros_args
+from rclpy.validate_full_topic_name import validate_full_topic_name
 
+from alignment_ros.cli_options import (
+    adapt_to_publishers,
+    add_qos_arguments,
+    positive_float,
+    preset,
+    qos_options_given,
+    qos_profile_from_args,
+    split_ros_args,
+    unsigned_int,
+)
 from alignment_ros.echo_format import ECHO_TRUNCATE_LENGTH, to_csv_header, to_csv_row, to_yaml
 from alignment_ros.topics import TOPIC_TYPES, msg_class
 
-DISCOVERY_WAIT_S = 5.0
-"""How long to look for the topic's type in the graph when neither --type nor --timeout say."""
+SPIN_TIME_S = 0.5
+"""ros2cli's discovery wait before looking the topic up in the graph (``--spin-time``)."""
+
+EXIT_SIGNAL = int(signal.SIGTERM)
+"""ros2cli returns SIGTERM's number when a signal shut rclpy down during the spin."""
+
+
+class EchoError(RuntimeError):
+    """An error ros2 reports as its message on stderr with exit status 1."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """``ros2 topic echo``'s options (help texts as ros2's), then this project's extensions."""
+    p = argparse.ArgumentParser(prog='echo', description='Output messages from a topic.')
+    p.add_argument('--spin-time', type=float, default=SPIN_TIME_S,
+                   help='Spin time in seconds to wait for discovery (only applies when not '
+                        'using an already running daemon)')
+    p.add_argument('-s', '--use-sim-time', action='store_true', help='Enable ROS simulation time')
+    p.add_argument('--no-daemon', action='store_true',
+                   help='Do not spawn nor use an already running daemon (there is none here)')
+    p.add_argument('topic_name', help="Name of the ROS topic to listen to (e.g. '/chatter')")
+    p.add_argument('message_type', nargs='?',
+                   help="Type of the ROS message (e.g. 'std_msgs/msg/String')")
+    add_qos_arguments(p, 'subscribe', 'sensor_data')
+    p.add_argument('--csv', action='store_true',
+                   help='Output all recursive fields separated by commas (e.g. for plotting). '
+                        'If --include-message-info is also passed, the following fields are '
+                        'prepended: source_timestamp, received_timestamp, '
+                        'publication_sequence_number, reception_sequence_number.')
+    p.add_argument('--field', type=str, default=None,
+                   help="Echo a selected field of a message. Use '.' to select sub-fields. For "
+                        'example, to echo the position field of a nav_msgs/msg/Odometry message: '
+                        "'ros2 topic echo /odom --field pose.pose.position'")
+    p.add_argument('--full-length', '-f', action='store_true',
+                   help='Output all elements for arrays, bytes, and string with a length > '
+                        "'--truncate-length', by default they are truncated after "
+                        "'--truncate-length' elements with '...''")
+    p.add_argument('--truncate-length', '-l', type=unsigned_int, default=ECHO_TRUNCATE_LENGTH,
+                   help='The length to truncate arrays, bytes, and string to (default: '
+                        f'{ECHO_TRUNCATE_LENGTH})')
+    p.add_argument('--no-arr', action='store_true', help="Don't print array fields of messages")
+    p.add_argument('--no-str', action='store_true', help="Don't print string fields of messages")
+    p.add_argument('--flow-style', action='store_true',
+                   help='Print collections in the block style (not available with csv format)')
+    p.add_argument('--no-lost-messages', action='store_true',
+                   help="Don't report when a message is lost")
+    p.add_argument('--raw', action='store_true', help='Echo the raw binary representation')
+    p.add_argument('--filter', dest='filter_expr',
+                   help='Python expression to filter messages that are printed. Expression can '
+                        'use Python builtins as well as m (the message).')
+    p.add_argument('--once', action='store_true',
+                   help='Print the first message received and then exit.')
+    p.add_argument('--timeout', metavar='N', type=positive_float, default=None,
+                   help='Set a timeout in seconds for waiting')
+    p.add_argument('--include-message-info', '-i', action='store_true',
+                   help='Shows the associated message info.')
+    ext = p.add_argument_group('extensions of this project (not in ros2 topic echo)')
+    ext.add_argument('--count', type=int, metavar='N', help='exit after N printed messages')
+    ext.add_argument('--csv-header', action='store_true',
+                     help='with --csv: print column names before the first row')
+    return p
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     """Parse the command line (ROS arguments already removed)."""
-    p = argparse.ArgumentParser(prog='echo', description=__doc__.splitlines()[0])
-    p.add_argument('topic', help="topic name, e.g. '/aircraft/imu'")
-    p.add_argument('--type', dest='type_name', metavar='pkg/msg/Type',
-                   help='message type (default: from the topic contract, else from the graph)')
-    p.add_argument('--once', action='store_true', help='print the first message and exit')
-    p.add_argument('--count', type=int, metavar='N', help='exit after N messages')
-    p.add_argument('--timeout', type=float, metavar='S',
-                   help='stop after S wall seconds; exit 1 if nothing was received')
-    p.add_argument('--csv', action='store_true', help='one comma-separated row per message')
-    p.add_argument('--csv-header', action='store_true',
-                   help='with --csv: print column names before the first row')
-    p.add_argument('--full-length', '-f', action='store_true',
-                   help='do not truncate arrays, bytes and strings')
-    p.add_argument('--truncate-length', '-l', type=int, default=ECHO_TRUNCATE_LENGTH,
-                   help=f'truncate arrays, bytes and strings to this length (default {ECHO_TRUNCATE_LENGTH})')
+    p = build_parser()
     args = p.parse_args(argv)
     if args.count is not None and args.count < 1:
         p.error('--count must be >= 1')
-    if args.timeout is not None and args.timeout <= 0:
-        p.error('--timeout must be > 0')
-    if args.once:
-        args.count = 1
-    if not args.topic.startswith('/'):
-        args.topic = '/' + args.topic
-    if args.type_name and args.type_name.count('/') == 1:  # accept pkg/Type like ros2
-        pkg, name = args.type_name.split('/')
-        args.type_name = f'{pkg}/msg/{name}'
     return args
 
 
-def discover_type(node: Node, topic: str, wait_s: float) -> str | None:
-    """Look up the topic's type in the ROS graph, waiting up to ``wait_s`` seconds."""
-    deadline = time.monotonic() + wait_s
+def message_class(type_name: str) -> Any:
+    """The message class of 'pkg/msg/Type' (or 'pkg/Type'), as rosidl_runtime_py resolves it."""
+    parts = type_name.split('/')
+    if len(parts) == 2:
+        parts.insert(1, 'msg')
+    try:
+        cls = msg_class('/'.join(parts)) if len(parts) == 3 else None
+    except (ImportError, AttributeError, ValueError):
+        cls = None
+    if cls is None or not hasattr(cls, 'SLOT_TYPES'):
+        raise ValueError(type_name)
+    return cls
+
+
+def wait_for_publishers(node: Node, topic: str, spin_time: float) -> list[Any]:
+    """Wait up to ``spin_time`` for the topic's publishers to be discovered; return their info."""
+    deadline = time.monotonic() + spin_time
     while True:
-        for name, types in node.get_topic_names_and_types():
-            if name == topic and types:
-                if len(types) > 1:
-                    raise RuntimeError(f'topic {topic} has more than one type: {", ".join(types)}')
-                return types[0]
-        if time.monotonic() >= deadline:
-            return None
-        time.sleep(0.1)
+        pubs = node.get_publishers_info_by_topic(topic)
+        if pubs or time.monotonic() >= deadline:
+            return pubs
+        time.sleep(0.02)
 
 
-def choose_qos(node: Node, topic: str) -> QoSProfile:
-    """KEEP_ALL, RELIABLE unless some publisher is best-effort, TRANSIENT_LOCAL if all are."""
-    pubs = node.get_publishers_info_by_topic(topic)
-    reliable = all(p.qos_profile.reliability == ReliabilityPolicy.RELIABLE for p in pubs)
-    latched = bool(pubs) and all(
-        p.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in pubs)
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_ALL,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
-    )
+def choose_qos(args: argparse.Namespace, offered: list[QoSProfile]) -> QoSProfile:
+    """The subscription QoS ros2 would choose (notes on a mixed offer printed as ros2 does)."""
+    if qos_options_given(args):
+        return qos_profile_from_args(args)
+    profile, notes = adapt_to_publishers(preset(args.qos_profile), offered)
+    for note in notes:
+        print(note)
+    return profile
 
 
-class _Printer:
-    """Subscription callback: formats and prints, counts, remembers when to stop."""
+def graph_type(node: Node, topic: str) -> str | None:
+    """The topic's type in the graph (hidden topics included), None if it is not there."""
+    for name, types in node.get_topic_names_and_types():
+        if name == topic:
+            if len(types) > 1:
+                raise EchoError(f"Cannot echo topic '{topic}', as it contains more than one "
+                                f"type: [{', '.join(types)}]")
+            return types[0]
+    return None
 
-    def __init__(self, args: argparse.Namespace) -> None:
+
+class Printer:
+    """The subscription callback: field, filter, format, print; counts and knows when to stop."""
+
+    def __init__(self, args: argparse.Namespace, field: list[str] | None, filter_code: Any) -> None:
         self.args = args
+        self.field = field
+        self.filter_code = filter_code
         self.truncate = None if args.full_length else args.truncate_length
-        self.received = 0
+        self.limit = 1 if args.once else args.count
+        self.printed = 0
         self.broken_pipe = False
 
     @property
     def done(self) -> bool:
-        return self.broken_pipe or (self.args.count is not None and self.received >= self.args.count)
+        return self.broken_pipe or (self.limit is not None and self.printed >= self.limit)
 
-    def __call__(self, msg: Any) -> None:
+    def __call__(self, msg: Any, info: Any) -> None:
         if self.done:
             return
-        if self.args.csv:
-            text = to_csv_row(msg, truncate_length=self.truncate) + '\n'
-            if self.args.csv_header and self.received == 0:
-                text = to_csv_header(msg, truncate_length=self.truncate) + '\n' + text
-        else:
-            text = to_yaml(msg, truncate_length=self.truncate) + '---\n'
-        self.received += 1
+        sub = msg
+        for name in self.field or ():
+            try:
+                sub = getattr(sub, name)
+            except AttributeError as exc:
+                raise EchoError(f"Invalid field '{'.'.join(self.field)}': {exc}") from None
+        if self.filter_code is not None and not eval(self.filter_code, {}, {'m': sub}):  # noqa: S307
+            return
+        self.printed += 1
+        self._write(self._text(sub, info))
+
+    def _text(self, sub: Any, info: Any) -> str:
+        a = self.args
+        if not hasattr(sub, '__slots__'):  # --raw bytes, or a --field that is not a message
+            head = (f'---Got new message, message info:---\n{info}\n---Message data:---\n'
+                    if a.include_message_info else '')
+            return f'{head}{sub}\n---\n'
+        kw = {'truncate_length': self.truncate, 'no_arr': a.no_arr}
+        if a.csv:
+            row = to_csv_row(sub, no_str=a.no_str, **kw)
+            if a.include_message_info:
+                row = ','.join(str(x) for x in info.values()) + ',' + row
+            if a.csv_header and self.printed == 1:
+                row = to_csv_header(sub, **kw) + '\n' + row
+            return row + '\n'
+        head = yaml.dump(info) + '---\n' if a.include_message_info else ''
+        return head + to_yaml(sub, no_str=a.no_str, flow_style=a.flow_style, **kw) + '---\n'
+
+    def _write(self, text: str) -> None:
         try:
             sys.stdout.write(text)
             sys.stdout.flush()
@@ -121,57 +225,96 @@ class _Printer:
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``echo``."""
-    raw_argv = sys.argv if argv is None else ['echo', *argv]
-    args = parse_args(remove_ros_args(raw_argv)[1:])
-    start = time.monotonic()
-    stop = {'signal': False}
+def _message_lost(status: Any) -> None:
+    print('A message was lost!!!\n\ttotal count change:'
+          f'{status.total_count_change}\n\ttotal count: {status.total_count}', end='---\n',
+          flush=True)
+
+
+def _field_path(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    path = [p for p in text.split('.') if p]
+    if not path:
+        raise EchoError(f"Invalid field value '{text}'")
+    return path
+
+
+def _compile_filter(expr: str | None) -> Any:
+    if not expr:
+        return None
+    try:
+        return compile(expr, '<filter>', 'eval')
+    except SyntaxError as exc:
+        raise EchoError(f'Invalid filter expression {expr!r}: {exc}') from None
+
+
+def run(args: argparse.Namespace, ros_argv: list[str]) -> int:
+    """Subscribe and print until done; return the exit status (EchoError: status 1)."""
+    printer = Printer(args, _field_path(args.field), _compile_filter(args.filter_expr))
+    stop = {'signal': False, 'timeout': False}
 
     def on_signal(signum: int, frame: object) -> None:
         stop['signal'] = True
 
-    rclpy.init(args=raw_argv, signal_handler_options=SignalHandlerOptions.NO)
+    rclpy.init(args=ros_argv, signal_handler_options=SignalHandlerOptions.NO)
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
     node = Node(f'_echo_{os.getpid()}',
-                parameter_overrides=[Parameter('use_sim_time', value=False)])
+                parameter_overrides=[Parameter('use_sim_time', value=args.use_sim_time)])
     executor = SingleThreadedExecutor()
     executor.add_node(node)
-    printer = _Printer(args)
-    code = 0
     try:
-        type_name = args.type_name or TOPIC_TYPES.get(args.topic)
-        if type_name is None:
-            wait = args.timeout if args.timeout is not None else DISCOVERY_WAIT_S
-            type_name = discover_type(node, args.topic, wait)
-            if type_name is None:
-                print(f'echo: could not determine the type of {args.topic} (not in the topic '
-                      f'contract and not seen in the graph within {wait:g} s); pass --type',
-                      file=sys.stderr)
-                return 1
         try:
-            cls = msg_class(type_name)
-        except (ImportError, AttributeError, ValueError) as exc:
-            print(f'echo: invalid message type {type_name!r}: {exc}', file=sys.stderr)
-            return 1
-        node.create_subscription(cls, args.topic, printer, choose_qos(node, args.topic))
-        deadline = None if args.timeout is None else start + args.timeout
-        while not (printer.done or stop['signal']):
-            if deadline is not None and time.monotonic() >= deadline:
-                break
+            topic = expand_topic_name(args.topic_name, node.get_name(), node.get_namespace())
+            validate_full_topic_name(topic)
+        except (ValueError, InvalidTopicNameException) as exc:
+            raise EchoError(str(exc)) from None
+        offered = [p.qos_profile for p in wait_for_publishers(node, topic, args.spin_time)]
+        type_name = args.message_type
+        if type_name is None:
+            type_name = graph_type(node, topic) or TOPIC_TYPES.get(topic)
+            if type_name is None:
+                print(f'WARNING: topic [{args.topic_name}] does not appear to be published yet',
+                      flush=True)
+                raise EchoError('Could not determine the type for the passed topic')
+            if not offered and topic in TOPIC_TYPES:  # contract topic, publisher not up yet
+                offered = [QoSProfile(depth=1, reliability=QoSReliabilityPolicy.RELIABLE,
+                                      durability=QoSDurabilityPolicy.VOLATILE)]
+        try:
+            cls = message_class(type_name)
+        except ValueError:
+            raise EchoError('The passed message type is invalid' if args.message_type
+                            else f"The message type '{type_name}' is invalid") from None
+        qos = choose_qos(args, offered)
+        if args.timeout is not None:
+            node.create_timer(args.timeout, lambda: stop.update(timeout=True))
+        events = None if args.no_lost_messages else SubscriptionEventCallbacks(
+            message_lost=_message_lost)
+        try:
+            node.create_subscription(cls, topic, printer, qos, event_callbacks=events, raw=args.raw)
+        except UnsupportedEventTypeError:
+            node.create_subscription(cls, topic, printer, qos, raw=args.raw)
+        while not (printer.done or stop['signal'] or stop['timeout']):
             executor.spin_once(timeout_sec=0.1)
-        if printer.broken_pipe:
-            code = 0
-        elif deadline is not None and printer.received == 0 and not stop['signal']:
-            print(f'echo: no message received on {args.topic} within {args.timeout:g} s',
-                  file=sys.stderr)
-            code = 1
     finally:
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
-    return code
+    return EXIT_SIGNAL if stop['signal'] and not printer.done else 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``echo``."""
+    own, ros = split_ros_args(sys.argv[1:] if argv is None else argv)
+    args = parse_args(own)
+    ros_argv = ['echo', *ros]
+    try:
+        return run(args, ros_argv)
+    except EchoError as exc:
+        sys.stdout.flush()
+        print(exc, file=sys.stderr)
+        return 1
 
 
 if __name__ == '__main__':

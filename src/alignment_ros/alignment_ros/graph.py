@@ -58,9 +58,14 @@ def root() -> Path:
     return Path(os.environ.get('ALIGN_ROOT', Path(__file__).resolve().parents[3]))
 
 
-def use_domain(preferred: int | None) -> int:
-    """Claim a ROS domain for this run and export it to the processes it starts."""
-    dom = domain.claim(preferred)
+def use_domain(given: int | None, prog: str = 'run_graph') -> int:
+    """Claim this run's ROS domain (--domain-id, else an exported ROS_DOMAIN_ID, else a free
+    one) and export it to the processes it starts; one that cannot be had ends the run (2)."""
+    try:
+        dom = domain.for_run(given)
+    except RuntimeError as e:
+        print(f'{prog}: {e}', file=sys.stderr)
+        raise SystemExit(2) from None
     os.environ['ROS_DOMAIN_ID'] = str(dom)
     print(f'ROS_DOMAIN_ID={dom}  (to watch: ROS_DOMAIN_ID={dom} scripts/echo.sh TOPIC)', flush=True)
     return dom
@@ -91,7 +96,8 @@ def start_recorder(out: Path, bag: Path, end_time_s: float, topic_list, wait_top
     """Start the recorder and wait for its ``ready`` line. With expect_counts it records, after
     end-time, until every topic has the count that file gives (see :func:`finish_recording`)."""
     cmd = [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/recorder'),
-           '--out', str(bag), '--end-time', repr(end_time_s), '--stats',
+           '--output', str(bag), '--node-name', 'recorder', '--idle-timeout', '5',
+           '--end-time', repr(end_time_s), '--stats',
            str(out / 'stats' / f'{name}.json'), '--topics', *topic_list,
            '--wait-topics', *wait_topics]
     if expect_counts is not None:
@@ -182,7 +188,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument('--real-time-factor', type=float, default=5.0)
     ap.add_argument('--timeout', type=float, default=None, help='wall seconds before giving up')
     ap.add_argument('--domain-id', type=int, default=None,
-                    help='ROS_DOMAIN_ID for the run (default: a free one, printed at the start)')
+                    help='ROS_DOMAIN_ID for the run (default: the exported ROS_DOMAIN_ID, else a '
+                         'free one; printed at the start)')
     a = ap.parse_args(argv)
     try:
         given = core_scenario.given_data(a.scenario, core_scenario.parse_overrides(a.sets), a.seed)

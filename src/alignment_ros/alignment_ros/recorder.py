@@ -1,40 +1,42 @@
-"""``recorder``: record topics to a rosbag2 MCAP bag (rosbag2 is not available here).
+"""``recorder``: ``ros2 bag record`` for this project (rosbag2 is not available here).
 
-Subscriptions are raw (serialized CDR bytes, no deserialisation) with the STREAM QoS
-(RELIABLE + KEEP_ALL), so no message is lost and each costs a few microseconds.
+Options and topic selection: :mod:`alignment_ros.record_options`. Topics are discovered from
+the graph every ``--polling-interval`` ms (``get_topic_names_and_types``), so any topic of an
+installed type can be recorded; a subscription asks what the publishers offer (reliable only if
+all are, transient-local only if all are) with KEEP_ALL history, and a topic given with its type
+(or one of the project's) is subscribed at once with the STREAM QoS (RELIABLE + KEEP_ALL).
+Subscriptions are raw (CDR bytes, no deserialisation): no message is lost and each costs a few
+microseconds. The bag (:mod:`alignment_ros.bag_writer`) stores the publishers' offered QoS and
+type hash, taken from the graph when a topic's first message arrives.
 
-Log time: simulation time, see :mod:`alignment_ros.bag`: the header stamp (read straight from
-the CDR bytes), the clock value for ``/clock``, else the latest ``/clock`` value received (before
-any ``/clock``: the largest stamp seen so far).
+Log time: simulation time, see :mod:`alignment_ros.bag`.
 
 End: the recorder stops at the first of
 
+* ``signal``: SIGINT or SIGTERM (``ros2 bag record``'s only end);
 * ``end_time``: ``--end-time`` is given and every topic of ``--wait-topics`` has received a
   message stamped >= end-time (for a topic without a stamp: its log time); without
-  ``--wait-topics``, every topic with a stamp that has received anything must reach it (a
-  stream that legitimately stops early, like ``/truth/misalignment`` at the launch, belongs
-  outside ``--wait-topics``). It prints ``recorder end-time reached`` and then, with
-  ``--expect-counts FILE``, keeps recording until FILE exists (``{topic: count}``: what the
-  publishers report they sent, written by the launcher once they have stopped) and every
-  recorded topic has received that count; without it, until no message arrived for
-  ``--drain`` wall seconds (a guess: a message the transport dropped is resent by the reliable
-  protocol only at the writer's next heartbeat, seconds later, and the messages after it on that
-  topic wait for it, so a quiet period can end before a slow topic is complete);
+  ``--wait-topics``, every topic with a stamp that has received anything must reach it. It
+  prints ``recorder end-time reached`` and then, with ``--expect-counts FILE``, keeps recording
+  until FILE exists (``{topic: count}``: what the publishers report they sent, written by the
+  launcher once they have stopped) and every recorded topic has that count; without it, until
+  no message arrived for ``--drain`` wall seconds (a guess: a message the transport dropped is
+  resent only at the writer's next heartbeat, seconds later);
 * ``incomplete``: ``--expect-counts`` is given and the counts were not all reached within
   ``--expect-timeout`` wall seconds of end-time (the stats list the shortfall as ``missing``);
-* ``idle_timeout``: nothing arrived for ``--idle-timeout`` wall seconds after the first message;
-* ``signal``: SIGINT or SIGTERM.
+* ``idle_timeout``: ``--idle-timeout`` S > 0 and nothing arrived for S wall seconds after the
+  first message.
 
 While a topic is short of its expected count the recorder also takes from its subscription
-directly (not only when the executor dispatches an event), so a message that reached the reader
-is never left behind. It then closes the bag (MCAP summary + metadata.yaml) and writes
-``--stats``. It prints ``recorder ready`` (one flushed stdout line) once every subscription
-exists.
+directly, so a message that reached the reader is never left behind. It then closes the bag
+(sorted files, metadata.yaml) and writes ``--stats``. It prints ``recorder ready`` (one flushed
+stdout line) once the first subscriptions exist.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 import time
 from pathlib import Path
@@ -44,72 +46,51 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from alignment_ros.bag import BagError, BagWriter, stamp_reader
-from alignment_ros.node_util import stop_on_signals
 from alignment_ros.qos import STREAM
-from alignment_ros.topics import CLOCK, TOPIC_TYPES, msg_class
+from alignment_ros.record_options import TopicFilter, parse_args
+from alignment_ros.topics import CLOCK, msg_class
 
 NS = 1_000_000_000
 SPIN_TIMEOUT_S = 0.05
+FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed recorder keeps)
 
 
-def parse_topic(spec: str) -> tuple[str, str]:
-    """'TOPIC' (type from the topic contract) or 'TOPIC=pkg/msg/Type' -> (topic, type)."""
-    topic, _, type_name = spec.partition('=')
-    if not topic.startswith('/'):
-        topic = '/' + topic
-    type_name = type_name or TOPIC_TYPES.get(topic, '')
-    if not type_name:
-        raise argparse.ArgumentTypeError(
-            f'{topic} is not in the topic contract: give its type as {topic}=pkg/msg/Type')
-    return topic, type_name
+def qos_dict(q: QoSProfile) -> dict[str, Any]:
+    """An offered QoS profile as rosbag2 (metadata version 9) stores it."""
+    def dur(d: Any) -> dict[str, int]:
+        return {'sec': d.nanoseconds // NS, 'nsec': d.nanoseconds % NS}
+    return {'history': q.history.name.lower(), 'depth': q.depth,
+            'reliability': q.reliability.name.lower(), 'durability': q.durability.name.lower(),
+            'deadline': dur(q.deadline), 'lifespan': dur(q.lifespan),
+            'liveliness': q.liveliness.name.lower(),
+            'liveliness_lease_duration': dur(q.liveliness_lease_duration),
+            'avoid_ros_namespace_conventions': q.avoid_ros_namespace_conventions}
 
 
-def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    """Parse the command line (ROS arguments already removed)."""
-    p = argparse.ArgumentParser(prog='recorder', description=__doc__.splitlines()[0])
-    p.add_argument('--out', required=True, type=Path, help='bag directory to create (must not exist)')
-    p.add_argument('--topics', nargs='+', type=parse_topic, metavar='TOPIC[=TYPE]',
-                   help='topics to record (default: every topic of the contract)')
-    p.add_argument('--end-time', type=float, metavar='S', help='simulation time (s) to stop at')
-    p.add_argument('--wait-topics', nargs='+', default=[], metavar='TOPIC',
-                   help='with --end-time: topics that must also reach end-time before stopping')
-    p.add_argument('--idle-timeout', type=float, default=5.0, metavar='S',
-                   help='stop when nothing arrived for S wall seconds after the first message '
-                        '(default 5)')
-    p.add_argument('--drain', type=float, default=0.5, metavar='S',
-                   help='after end-time is reached, keep recording until S wall seconds are quiet '
-                        '(default 0.5)')
-    p.add_argument('--expect-counts', type=Path, metavar='FILE',
-                   help='after end-time: wait for FILE ({topic: count}, the publishers\' final '
-                        'counts) and record until every topic has reached its count (instead of '
-                        '--drain)')
-    p.add_argument('--expect-timeout', type=float, default=120.0, metavar='S',
-                   help='with --expect-counts: give up S wall seconds after end-time '
-                        '(end reason incomplete; default 120)')
-    p.add_argument('--stats', type=Path, metavar='FILE', help='write counts and end reason as JSON')
-    p.add_argument('--executor', choices=('events', 'single'), default='events',
-                   help='rclpy executor (default: events, the EventsExecutor)')
-    args = p.parse_args(argv)
-    if args.out.exists():
-        p.error(f'--out {args.out} exists already: the recorder only creates new bags')
-    args.topics = dict(args.topics) if args.topics else dict(TOPIC_TYPES)
-    for topic, type_name in args.topics.items():
-        try:
-            stamp_reader(type_name)
-            msg_class(type_name)
-        except (BagError, ImportError, AttributeError, ValueError) as exc:
-            p.error(f'{topic}: unusable message type {type_name!r}: {exc}')
-    args.wait_topics = [t if t.startswith('/') else '/' + t for t in args.wait_topics]
-    missing = [t for t in args.wait_topics if t not in args.topics]
-    if missing:
-        p.error(f'--wait-topics not recorded: {", ".join(missing)}')
-    if args.expect_counts is not None and args.end_time is None:
-        p.error('--expect-counts needs --end-time')
-    return args
+def endpoints_hash(infos: list[Any]) -> str:
+    """The publishers' common type hash 'RIHS01_...' ('' if none or if they disagree)."""
+    hashes = {(i.topic_type_hash.version, bytes(i.topic_type_hash.value)) for i in infos
+              if i.topic_type_hash.version > 0}
+    if len(hashes) != 1:
+        return ''
+    version, value = hashes.pop()
+    return f'RIHS{version:02d}_{value.hex()}' if version == 1 else ''
+
+
+def adapted_qos(infos: list[Any]) -> QoSProfile:
+    """Subscription QoS compatible with every publisher (rosbag2's rule), KEEP_ALL history."""
+    reliable = bool(infos) and all(i.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+                                   for i in infos)
+    latched = bool(infos) and all(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
+                                  for i in infos)
+    return QoSProfile(history=HistoryPolicy.KEEP_ALL,
+                      reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
 
 
 def read_expected(path: Path) -> dict[str, int] | None:
@@ -121,15 +102,36 @@ def read_expected(path: Path) -> dict[str, int] | None:
     return {str(k): int(v) for k, v in json.loads(text).items()}
 
 
+def stop_on_signals() -> dict[str, bool]:
+    """SIGINT/SIGTERM set the returned dict's 'signal' flag (the main loop polls it). Not
+    node_util's: importing that pulls in the core (scipy), seconds of start-up."""
+    stop = {'signal': False}
+
+    def on_signal(signum: int, frame: object) -> None:
+        stop['signal'] = True
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    return stop
+
+
+def info(text: str) -> None:
+    """A log line on stderr (stdout carries the lines the launcher waits for)."""
+    print(f'[INFO] [recorder]: {text}', file=sys.stderr, flush=True)
+
+
 class Recorder:
-    """Raw subscriptions -> BagWriter, with the end-of-recording bookkeeping."""
+    """Raw subscriptions -> BagWriter, topic discovery, and the end-of-recording bookkeeping."""
 
     def __init__(self, node: Node, writer: BagWriter, topics: dict[str, str],
-                 end_time_s: float | None, wait_topics: list[str]) -> None:
+                 end_time_s: float | None, wait_topics: list[str], *,
+                 topic_filter: TopicFilter | None = None, use_sim_time: bool = False) -> None:
+        self.node = node
         self.writer = writer
+        self.filter = topic_filter
+        self.use_sim_time = use_sim_time
         self.end_ns = None if end_time_s is None else round(end_time_s * NS)
         self.wait_topics = set(wait_topics)
-        self.counts = dict.fromkeys(topics, 0)
+        self.counts: dict[str, int] = {}
         self.last_stamp_ns: dict[str, int] = {}
         self.stamped_seen: set[str] = set()  # topics with a stamp that received a message
         self.reached: set[str] = set()  # topics whose last log time >= end-time
@@ -138,13 +140,59 @@ class Recorder:
         self.first_rx: float | None = None
         self.last_rx: float | None = None
         self.taken_directly = 0  # messages taken by take_pending() rather than by the executor
-        self.subscriptions = {}
-        self.handlers = {}
+        self.subscriptions: dict[str, Any] = {}
+        self.handlers: dict[str, Any] = {}
+        self._endpoints_known: set[str] = set()
+        self._unusable: set[str] = set()
         for topic, type_name in topics.items():
-            writer.add_topic(topic, type_name)
-            self.handlers[topic] = self._callback(topic, type_name)
-            self.subscriptions[topic] = node.create_subscription(
-                msg_class(type_name), topic, self.handlers[topic], STREAM, raw=True)
+            self.subscribe(topic, type_name, STREAM)
+
+    def subscribe(self, topic: str, type_name: str, qos: QoSProfile) -> None:
+        """Add the topic to the bag, then subscribe (so no callback meets an unknown topic)."""
+        self.writer.add_topic(topic, type_name)
+        self.counts[topic] = 0
+        self.handlers[topic] = self._callback(topic, type_name)
+        self.subscriptions[topic] = self.node.create_subscription(
+            msg_class(type_name), topic, self.handlers[topic], qos, raw=True)
+        info(f"Subscribed to topic '{topic}'")
+
+    def discover(self) -> int:
+        """Subscribe to the graph's new topics that the filter selects; return how many."""
+        if self.filter is None:
+            return 0
+        n = 0
+        for topic, types in self.node.get_topic_names_and_types():
+            if topic in self.subscriptions or topic in self._unusable or len(set(types)) != 1:
+                continue
+            if not self.filter.take(topic, types[0]):
+                continue
+            pubs = self.node.get_publishers_info_by_topic(topic)
+            if not pubs and not self.filter.include_unpublished:
+                continue
+            try:
+                msg_class(types[0])
+            except (ImportError, AttributeError, ValueError):
+                self._unusable.add(topic)
+                info(f"Topic '{topic}' has unknown type '{types[0]}': not recorded")
+                continue
+            self.subscribe(topic, types[0], adapted_qos(pubs))
+            n += 1
+        return n
+
+    def pending_topics(self) -> list[str]:
+        """Topics named on the command line that are not subscribed yet."""
+        return [t for t in (self.filter.topics if self.filter else []) if t not in self.subscriptions]
+
+    def record_endpoints(self, topic: str) -> None:
+        """Store the publishers' offered QoS and type hash for the topic (once, when known)."""
+        infos = self.node.get_publishers_info_by_topic(topic)
+        if infos:
+            self.writer.set_topic_endpoints(topic, [qos_dict(i.qos_profile) for i in infos],
+                                            endpoints_hash(infos))
+            self._endpoints_known.add(topic)
+
+    def _sim_now(self) -> int:
+        return self.node.get_clock().now().nanoseconds if self.use_sim_time else 0
 
     def _callback(self, topic: str, type_name: str) -> Any:
         read_stamp = stamp_reader(type_name)
@@ -165,7 +213,10 @@ class Recorder:
                 if counts[topic] == 0:
                     self.stamped_seen.add(topic)
             else:
-                t = self.clock_ns if self.clock_ns is not None else self.max_stamp_ns
+                t = self.clock_ns if self.clock_ns is not None else (
+                    self._sim_now() or self.max_stamp_ns)
+            if counts[topic] == 0 and topic not in self._endpoints_known:
+                self.record_endpoints(topic)
             write(topic, data, t)
             counts[topic] += 1
             if t > last.get(topic, -1):
@@ -191,10 +242,10 @@ class Recorder:
             sub = self.subscriptions[topic]
             while True:
                 with sub.handle:
-                    info = sub.handle.take_message(sub.msg_type, sub.raw)
-                if info is None:
+                    taken = sub.handle.take_message(sub.msg_type, sub.raw)
+                if taken is None:
                     break
-                self.handlers[topic](info[0])
+                self.handlers[topic](taken[0])
                 n += 1
         self.taken_directly += n
         return n
@@ -208,6 +259,12 @@ class Recorder:
             return self.wait_topics <= self.reached
         return self.stamped_seen <= self.reached
 
+    def finish_endpoints(self) -> None:
+        """Offered QoS of topics that never received a message (their publishers, if any)."""
+        for topic in self.subscriptions:
+            if topic not in self._endpoints_known:
+                self.record_endpoints(topic)
+
 
 def make_executor(kind: str) -> Any:
     """EventsExecutor (fast; spin it from the main thread only) or SingleThreadedExecutor."""
@@ -217,51 +274,73 @@ def make_executor(kind: str) -> Any:
     return SingleThreadedExecutor()
 
 
+def _loop(args: argparse.Namespace, rec: Recorder, executor: Any,
+          stop: dict[str, bool]) -> tuple[str, dict[str, int] | None]:
+    """Spin until an end condition; return (end reason, expected counts)."""
+    interval = max(args.polling_interval, 1) / 1000.0
+    discovering = not args.no_discovery and (args.filter.discovers() or rec.pending_topics())
+    next_poll = time.monotonic() + interval
+    next_flush = time.monotonic() + FLUSH_INTERVAL_S
+    end_seen: float | None = None
+    expected: dict[str, int] | None = None
+    while True:
+        executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+        if stop['signal']:
+            return 'signal', expected
+        now = time.monotonic()
+        if now >= next_flush:
+            rec.writer.flush()
+            next_flush = now + FLUSH_INTERVAL_S
+        if discovering and now >= next_poll:
+            rec.discover()
+            discovering = args.filter.discovers() or bool(rec.pending_topics())
+            next_poll = now + interval
+        if end_seen is None and rec.end_time_reached():
+            end_seen = now
+            print('recorder end-time reached', flush=True)
+        if end_seen is not None and args.expect_counts is not None:
+            if expected is None:
+                expected = read_expected(args.expect_counts)
+            if expected is not None:
+                short = rec.missing(expected)
+                if short and rec.take_pending(list(short)):
+                    short = rec.missing(expected)
+                if not short:
+                    return 'end_time', expected
+            if now - end_seen >= args.expect_timeout:
+                return 'incomplete', expected
+        elif end_seen is not None:
+            quiet_since = max(end_seen, rec.last_rx or end_seen)
+            if now - quiet_since >= args.drain or now - end_seen >= max(10 * args.drain, 5.0):
+                return 'end_time', expected
+        elif (args.idle_timeout > 0 and rec.last_rx is not None
+              and now - rec.last_rx >= args.idle_timeout):
+            return 'idle_timeout', expected
+
+
 def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     """Record until an end condition; return the stats dict."""
+    writer = BagWriter(args.output, max_bag_duration_s=args.max_bag_duration,
+                       max_bag_size=args.max_bag_size, compression_mode=args.compression_mode,
+                       compression_format=args.compression_format, custom_data=args.custom_data)
     rclpy.init(args=ros_argv, signal_handler_options=SignalHandlerOptions.NO)
     stop = stop_on_signals()
-    node = Node('recorder', parameter_overrides=[Parameter('use_sim_time', value=False)])
+    node = Node(args.node_name, parameter_overrides=[
+        Parameter('use_sim_time', value=bool(args.use_sim_time))])
     executor = make_executor(args.executor)
-    writer = BagWriter(args.out)
     reason = 'error'
     expected: dict[str, int] | None = None
+    rec: Recorder | None = None
     try:
-        rec = Recorder(node, writer, args.topics, args.end_time, args.wait_topics)
+        rec = Recorder(node, writer, args.typed, args.end_time, args.wait_topics,
+                       topic_filter=args.filter, use_sim_time=args.use_sim_time)
         executor.add_node(node)
+        rec.discover()
         print('recorder ready', flush=True)
-        end_seen: float | None = None
-        while True:
-            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
-            if stop['signal']:
-                reason = 'signal'
-                break
-            now = time.monotonic()
-            if end_seen is None and rec.end_time_reached():
-                end_seen = now
-                print('recorder end-time reached', flush=True)
-            if end_seen is not None and args.expect_counts is not None:
-                if expected is None:
-                    expected = read_expected(args.expect_counts)
-                if expected is not None:
-                    short = rec.missing(expected)
-                    if short and rec.take_pending(list(short)):
-                        short = rec.missing(expected)
-                    if not short:
-                        reason = 'end_time'
-                        break
-                if now - end_seen >= args.expect_timeout:
-                    reason = 'incomplete'
-                    break
-            elif end_seen is not None:
-                quiet_since = max(end_seen, rec.last_rx or end_seen)
-                if now - quiet_since >= args.drain or now - end_seen >= max(10 * args.drain, 5.0):
-                    reason = 'end_time'
-                    break
-            elif rec.last_rx is not None and now - rec.last_rx >= args.idle_timeout:
-                reason = 'idle_timeout'
-                break
+        reason, expected = _loop(args, rec, executor, stop)
     finally:
+        if rec is not None:
+            rec.finish_endpoints()
         writer.close()
         executor.shutdown()
         node.destroy_node()
@@ -269,7 +348,8 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     span = (rec.last_rx - rec.first_rx) if rec.first_rx is not None else 0.0
     total = sum(rec.counts.values())
     return {
-        'bag': str(args.out),
+        'bag': str(args.output),
+        'files': writer.metadata.relative_file_paths if writer.metadata else [],
         'topics': rec.counts,
         'total': total,
         'end_reason': reason,
@@ -284,7 +364,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``recorder``."""
+    """Entry point of ``recorder`` (scripts/record.sh)."""
     raw_argv = sys.argv if argv is None else ['recorder', *argv]
     args = parse_args(remove_ros_args(raw_argv)[1:])
     try:
@@ -295,7 +375,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.stats:
         args.stats.parent.mkdir(parents=True, exist_ok=True)
         args.stats.write_text(json.dumps(stats, indent=2) + '\n')
-    print(f'recorder done ({stats["end_reason"]}): {stats["total"]} messages in {args.out}',
+    print(f'recorder done ({stats["end_reason"]}): {stats["total"]} messages in {args.output}',
           flush=True)
     return 0
 

@@ -67,7 +67,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument('--params-file', type=Path, default=None,
                     help="filter parameters (default: the run's params.yaml next to the bag)")
     ap.add_argument('--domain-id', type=int, default=None,
-                    help='ROS_DOMAIN_ID for the replay (default: a free one, printed at the start)')
+                    help='ROS_DOMAIN_ID for the replay (default: the exported ROS_DOMAIN_ID, else a '
+                         'free one; printed at the start)')
     a = ap.parse_args(argv)
     bag = a.bag / 'bag' if (a.bag / 'bag').is_dir() else a.bag
     params = a.params_file or bag.parent / 'params.yaml'
@@ -87,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     for d in ('logs', 'stats'):
         (out / d).mkdir(parents=True, exist_ok=True)
-    use_domain(a.domain_id)
+    use_domain(a.domain_id, 'replay')
     procs: dict[str, subprocess.Popen] = {}
     wall0 = time.monotonic()
     try:
@@ -102,6 +103,7 @@ def main(argv: list[str] | None = None) -> int:
         player = subprocess.run(
             [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/player'), str(bag),
              '--topics', *play_topics, '--stats', str(out / 'stats' / 'player.json'),
+             '--rate', '0', '--lossless',   # as fast as the filter acknowledges, nothing lost
              '--wait-subscribers', *wait],
             stdout=open(out / 'logs' / 'player.log', 'w'), stderr=subprocess.STDOUT)
         if player.returncode != 0:

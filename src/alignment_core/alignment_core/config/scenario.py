@@ -96,10 +96,23 @@ def tau_of(t_ns: int, t0_ns: int) -> float:
 
 
 def config_dir() -> Path:
+    """The scenarios and params: $ALIGN_ROOT/config, else the source tree's (this file is
+    src/alignment_core/alignment_core/config/scenario.py), else the installed copy in
+    share/alignment_core/config (a colcon install without the repository)."""
     root = os.environ.get('ALIGN_ROOT')
     if root:
         return Path(root) / 'config'
-    return Path(__file__).resolve().parents[3] / 'config'
+    source = Path(__file__).resolve().parents[4] / 'config'
+    if source.is_dir():
+        return source
+    try:
+        from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
+    except ImportError:
+        return source
+    try:
+        return Path(get_package_share_directory('alignment_core')) / 'config'
+    except PackageNotFoundError:
+        return source
 
 
 def scenario_path(name_or_path: str) -> Path:

@@ -1,0 +1,87 @@
+"""Which ROS domain a run uses (alignment_ros.domain.for_run, behind run_graph.sh and
+replay.sh): --domain-id, else an exported ROS_DOMAIN_ID, else a free one; whichever it is,
+it is locked, and one another run of this project holds is refused.
+
+A lock is observed as another process would meet it: a second open file description of the
+lock file cannot take the exclusive flock the run holds."""
+from __future__ import annotations
+
+import fcntl
+
+import pytest
+
+from alignment_ros import domain
+
+
+def _locked(dom: int) -> bool:
+    with open(domain.LOCK_DIR / f'{dom}.lock', 'w') as f:
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            return True
+        fcntl.flock(f, fcntl.LOCK_UN)
+        return False
+
+
+@pytest.fixture
+def free_domain():
+    """A domain no run of this project holds now (claimed, then released: the test claims
+    it again through the code under test)."""
+    dom = domain.claim()
+    domain.release(dom)
+    return dom
+
+
+@pytest.fixture
+def claimed():
+    """Domains the test's for_run calls claimed, released afterwards."""
+    doms: list[int] = []
+    yield doms
+    for d in doms:
+        domain.release(d)
+
+
+@pytest.mark.parametrize('value', [None, '', '  '])
+def test_without_a_domain_given_a_free_one_is_claimed(monkeypatch, claimed, value):
+    if value is None:
+        monkeypatch.delenv('ROS_DOMAIN_ID', raising=False)
+    else:
+        monkeypatch.setenv('ROS_DOMAIN_ID', value)    # empty: unset, as rcl reads it
+    claimed.append(domain.for_run(None))
+    assert claimed[0] in domain.DOMAINS
+    assert _locked(claimed[0])
+
+
+def test_the_exported_domain_is_used_and_locked(monkeypatch, claimed, free_domain):
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain))
+    claimed.append(domain.for_run(None))
+    assert claimed == [free_domain]
+    assert _locked(free_domain)
+
+
+def test_domain_id_option_wins_over_the_environment(monkeypatch, claimed, free_domain):
+    domain.claim(free_domain)
+    other = domain.claim()          # another free domain (free_domain is held)
+    domain.release(other)
+    domain.release(free_domain)
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(other))
+    claimed.append(domain.for_run(free_domain))
+    assert claimed == [free_domain]
+    assert not _locked(other)
+
+
+def test_an_exported_domain_held_by_another_run_is_refused(monkeypatch, free_domain):
+    with open(domain.LOCK_DIR / f'{free_domain}.lock', 'w') as other_run:
+        fcntl.flock(other_run, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain))
+        with pytest.raises(RuntimeError, match=rf'ROS domain {free_domain} is in use.*unset it'):
+            domain.for_run(None)
+        with pytest.raises(RuntimeError, match=rf'ROS domain {free_domain} is in use'):
+            domain.for_run(free_domain)
+
+
+@pytest.mark.parametrize('value', ['abc', '-1', '233', '4.0', '1e2'])
+def test_a_domain_rcl_would_refuse_is_an_error(monkeypatch, value):
+    monkeypatch.setenv('ROS_DOMAIN_ID', value)
+    with pytest.raises(RuntimeError, match='is not a domain id'):
+        domain.for_run(None)
