@@ -12,7 +12,8 @@ from alignment_core.config import scenario
 from alignment_core.geometry import earth
 from alignment_core.ship.motion import make_motion
 from alignment_core.ship.paper import PaperShipMotion
-from alignment_core.ship.spectral import SpectralShipMotion, StraightCourse
+from alignment_core.ship.spectral import SpectralShipMotion
+from alignment_core.ship.track import StraightCourse
 from alignment_core.units import DEG
 from alignment_core.validation import ConfigError
 

@@ -39,10 +39,11 @@ def main(argv: list[str] | None = None) -> int:
     specs = exp.specs(seeds, a.first_seed)
     print(f'{exp.name}: {len(exp.cells)} cells x {seeds} seeds = {len(specs)} runs, '
           f'{a.workers if not a.scheduler else "dask"} workers -> {out}')
+    version = results.code_version()          # the code the runs use, taken before they start
     wall = time.perf_counter()
     outcomes = monte_carlo.run_many(specs, workers=a.workers, scheduler=a.scheduler)
     wall = time.perf_counter() - wall
-    results.write(out, exp, outcomes, seeds, a.first_seed, wall, a.workers)
+    results.write(out, exp, outcomes, seeds, a.first_seed, wall, a.workers, version)
     path = report.write_report(out, exp, outcomes, seeds, a.first_seed)
     print(f'{len(specs)} runs in {wall:.1f} s ({60 * len(specs) / wall:.1f} runs/min); report: {path}')
     return 0

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import hashlib
+import json
 import os
 import re
 import shutil
@@ -20,7 +21,6 @@ import sys
 from pathlib import Path
 
 from .catalogue import CATALOGUE, Experiment
-from .results import code_version
 
 ROOT = Path(os.environ.get('ALIGN_ROOT') or Path(__file__).resolve().parents[3])
 RESULTS_MD = ROOT / 'docs' / 'results.md'
@@ -83,10 +83,14 @@ def compact_table(report_md: str) -> str:
     return _table([[r[i] for i in keep] for r in rows])
 
 
-def stamp(exp: Experiment, seeds: int, workers: int) -> str:
-    day = datetime.datetime.now(datetime.UTC).strftime('%Y-%m-%d')
-    return (f'commit `{code_version(ROOT)}`, {day}, `scripts/experiment.sh {exp.name} --seeds {seeds} '
-            f'--workers {workers}`, {os.cpu_count()} cores')
+def stamp(exp: Experiment, out: Path) -> str:
+    """Commit, date, command and core count of the run in `out`, from its own files (meta.json holds
+    the commit and seeds the run used, timing.json its workers; the date is that of runs.csv)."""
+    meta = json.loads((out / 'meta.json').read_text())
+    timing = json.loads((out / 'timing.json').read_text())
+    day = datetime.datetime.fromtimestamp((out / 'runs.csv').stat().st_mtime, datetime.UTC).strftime('%Y-%m-%d')
+    return (f"commit `{meta['code_version']}`, {day}, `scripts/experiment.sh {exp.name} --seeds {meta['seeds']} "
+            f"--workers {timing['workers']}`, {os.cpu_count()} cores")
 
 
 def section(exp: Experiment, out: Path, quick_out: Path, stamp_line: str) -> str:
@@ -137,17 +141,12 @@ def main(argv: list[str] | None = None) -> int:
     names = a.names or list(CATALOGUE.experiments)
     for n in names:
         CATALOGUE.get(n)
-    stamps_file = OUT_DIR / 'stamps.txt'
-    stamps = dict(ln.split('\t', 1) for ln in stamps_file.read_text().splitlines()) if stamps_file.exists() else {}
     if not a.render_only:
         for n in names:
-            exp = CATALOGUE.get(n)
             _run([n, '--workers', str(a.workers), '--out', str(OUT_DIR / n)])
             _run([n, '--quick', '--workers', str(a.workers), '--out', str(OUT_DIR / f'{n}_quick')])
-            stamps[n] = stamp(exp, exp.seeds, a.workers)
-        OUT_DIR.mkdir(parents=True, exist_ok=True)
-        stamps_file.write_text(''.join(f'{k}\t{v}\n' for k, v in stamps.items()))
-    missing = [n for n in CATALOGUE.experiments if n not in stamps or not (OUT_DIR / n / 'report.md').exists()]
+    missing = [n for n in CATALOGUE.experiments
+               if not all((OUT_DIR / d / f).exists() for d in (n, f'{n}_quick') for f in ('report.md', 'meta.json'))]
     if missing:
         ap.error(f"no outputs for {', '.join(missing)}: run scripts/results.sh {' '.join(missing)}")
     parts = ['# Results', '',
@@ -159,8 +158,9 @@ def main(argv: list[str] | None = None) -> int:
              'unless the table says E/N/U. The papers are identified in [references.md](references.md).', '']
     blocks = {}
     for n, exp in CATALOGUE.experiments.items():
-        parts.append(section(exp, OUT_DIR / n, OUT_DIR / f'{n}_quick', stamps[n]))
-        blocks[n] = readme_block(exp, OUT_DIR / n, stamps[n])
+        made_by = stamp(exp, OUT_DIR / n)
+        parts.append(section(exp, OUT_DIR / n, OUT_DIR / f'{n}_quick', made_by))
+        blocks[n] = readme_block(exp, OUT_DIR / n, made_by)
     RESULTS_MD.write_text('\n'.join(parts))
     README.write_text(update_readme(README.read_text(), blocks))
     print(f'wrote {RESULTS_MD.relative_to(ROOT)} and the README blocks of {len(blocks)} experiments')

@@ -106,12 +106,14 @@ def code_version(root: Path | None = None) -> str:
 
 
 def write(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: int, first_seed: int,
-          wall_s: float, workers: int) -> None:
+          wall_s: float, workers: int, version: str | None = None) -> None:
+    """Write the results files; `version`: the code version the runs used (default: now)."""
     out.mkdir(parents=True, exist_ok=True)
     (out / 'runs.csv').write_text(_csv(*runs_table(outcomes, exp.axes)))
     (out / 'summary.csv').write_text(_csv(*summary_table(outcomes, exp.axes)))
     meta = {'schema_version': SCHEMA_VERSION, 'experiment': dataclasses.asdict(exp), 'seeds': seeds,
-            'first_seed': first_seed, 'runs': len(outcomes), 'code_version': code_version()}
+            'first_seed': first_seed, 'runs': len(outcomes),
+            'code_version': version if version is not None else code_version()}
     (out / 'meta.json').write_text(json.dumps(meta, indent=1, default=str) + '\n')
     arrays = {}
     for o in outcomes:

@@ -1,8 +1,13 @@
-"""The low-frequency MMG track of `course_keeping: mmg`, built from the ship configuration."""
+"""The ship's low-frequency track: a straight course at constant speed, or the MMG track of
+`course_keeping: mmg` built from the ship configuration."""
 from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+
+from alignment_core.geometry import earth
+from alignment_core.geometry.euler import heading_to_yaw
 from alignment_core.ship.config import ShipConfig
 from alignment_core.units import DEG, KNOT
 
@@ -25,3 +30,37 @@ def make_track(cfg: ShipConfig, external=None):
                            speed_to=cfg.speed_to_kn * KNOT if cfg.speed_to_kn >= 0.0 else -1.0)
     return ManoeuvringTrack(model, autopilot, gear, sched, cfg.lat_deg * DEG, cfg.lon_deg * DEG,
                             cfg.mmg_step_s, external)
+
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(8)     # 8-point Gauss-Legendre on [-1, 1]
+
+
+class StraightCourse:
+    """Rhumb line at constant ground speed: ENU velocity and yaw constant (heights ignored in
+    the radii: heave of metres changes the track by parts in 1e6 of its oscillation)."""
+
+    def __init__(self, lat0: float, lon0: float, heading: float, speed: float) -> None:
+        self.lat0, self.lon0, self.speed = lat0, lon0, speed
+        self.yaw = heading_to_yaw(heading)
+        self.v_n = speed * np.array([np.sin(heading), np.cos(heading), 0.0])
+
+    def _means(self, lat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gauss-Legendre means over [lat0, lat] of R_M and of R_M / (R_N cos lat)."""
+        x = 0.5 * (lat[:, None] - self.lat0) * (_GL_X + 1.0) + self.lat0
+        r_m, r_n = earth.radii(x)
+        w = 0.5 * _GL_W
+        return r_m @ w, (r_m / (r_n * np.cos(x))) @ w
+
+    def geodetic(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Latitude and longitude (rad) at times t (s)."""
+        t = np.asarray(t, dtype=float)
+        s_n = self.v_n[1] * t                                  # northward distance
+        r_m0, _ = earth.radii(self.lat0)
+        lat = self.lat0 + s_n / r_m0
+        for _ in range(4):                                     # Newton on the meridian arc
+            m_bar, _ = self._means(lat)
+            r_m, _ = earth.radii(lat)
+            lat = lat - ((lat - self.lat0) * m_bar - s_n) / r_m
+        m_bar, q_bar = self._means(lat)
+        lon = self.lon0 + self.v_n[0] * t * q_bar / m_bar
+        return lat, lon
