@@ -47,6 +47,9 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 # it (--domain-id wins; alignment_ros/domain.py); the tests always claim their own.
 export AMENT_PREFIX_PATH="$VENV\${AMENT_PREFIX_PATH:+:\$AMENT_PREFIX_PATH}"
 export PYTHONUNBUFFERED=1
+# one BLAS thread: the matrices are small, and a multithreaded BLAS sums in another order and moves
+# the last bits (experiments and their published digests must not depend on the machine's cores)
+export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1
 if [ -f "$ROOT/ros2_ws/install/setup.bash" ]; then
   _u=\$(set +o | grep nounset); set +u
   . "$ROOT/ros2_ws/install/setup.bash"

@@ -9,6 +9,11 @@ from pathlib import Path
 
 import pytest
 
+# before numpy loads: one BLAS thread, as scripts/env.sh sets it (a multithreaded BLAS moves the last bits,
+# and the freshness test compares the experiments' runs.csv byte for byte with docs/results.md)
+for _var in ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS'):
+    os.environ.setdefault(_var, '1')
+
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config/params/graph.yaml'
 # every test runs on a domain of its own (claimed, or given to its processes explicitly): a

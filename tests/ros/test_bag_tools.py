@@ -14,7 +14,6 @@ import time
 from pathlib import Path
 
 import pytest
-import rclpy
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from mcap.reader import make_reader
@@ -41,24 +40,6 @@ NS = 1_000_000_000
 
 # --- fixtures and helpers -------------------------------------------------------------------
 
-@pytest.fixture
-def domain_id(monkeypatch: pytest.MonkeyPatch, request: pytest.FixtureRequest) -> int:
-    """A ROS_DOMAIN_ID of its own (claimed by lock: no other run of ours uses it meanwhile)."""
-    from alignment_ros import domain
-    dom = domain.claim()
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(dom))
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    yield dom
-    domain.release(dom)
-
-
-@pytest.fixture
-def ros_context(domain_id: int):
-    """An rclpy context of its own on the test's domain."""
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=domain_id)
-    yield ctx
-    rclpy.try_shutdown(context=ctx)
 
 
 def imu(i: int, frame: str = 'aircraft') -> Imu:

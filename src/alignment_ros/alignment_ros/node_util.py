@@ -4,7 +4,6 @@ reliable subscriber before the process exits)."""
 from __future__ import annotations
 
 import json
-import signal
 import sys
 import time
 from collections import Counter
@@ -21,6 +20,7 @@ from rclpy.node import Node
 from alignment_core.validation import ConfigError
 
 from . import params, qos
+from .signals import stop_on_signals
 
 RCLError = rclpy_implementation.RCLError
 
@@ -132,16 +132,6 @@ class CountingNode(Node):
         if path:
             Path(path).write_text(json.dumps(self.stats(), indent=1))
 
-
-def stop_on_signals() -> dict[str, bool]:
-    """SIGINT/SIGTERM set the returned dict's 'signal' flag (for a main loop to poll)."""
-    stop = {'signal': False}
-
-    def on_signal(signum: int, frame: object) -> None:
-        stop['signal'] = True
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
-    return stop
 
 
 def _refuse(message: str) -> None:

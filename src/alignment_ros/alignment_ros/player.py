@@ -23,7 +23,6 @@ import argparse
 import json
 import logging
 import re
-import signal
 import sys
 import threading
 import time
@@ -46,12 +45,15 @@ from alignment_ros.play_options import parse_args
 from alignment_ros.qos import STREAM
 from alignment_ros.topics import msg_class
 
+from .signals import stop_on_signals
+
 NS = 1_000_000_000
 CLOCK_QOS = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=1,
                        reliability=QoSReliabilityPolicy.BEST_EFFORT,
                        durability=QoSDurabilityPolicy.VOLATILE)
 """rclcpp::ClockQoS, which rosbag2 publishes /clock with."""
 log = logging.getLogger('player')
+
 
 
 class PlayerError(RuntimeError):
@@ -207,16 +209,6 @@ class Playback:
                 acked = False
         return acked
 
-
-def stop_on_signals() -> dict[str, bool]:
-    """SIGINT/SIGTERM set the returned dict's 'signal' flag: playback stops, status 0 (as ros2)."""
-    stop = {'signal': False}
-
-    def on_signal(signum: int, frame: object) -> None:
-        stop['signal'] = True
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
-    return stop
 
 
 def _sleep(seconds: float, stop: dict[str, bool]) -> bool:

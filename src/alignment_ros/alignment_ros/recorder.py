@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import signal
 import sys
 import time
 from pathlib import Path
@@ -55,9 +54,12 @@ from alignment_ros.qos import STREAM
 from alignment_ros.record_options import TopicFilter, parse_args
 from alignment_ros.topics import CLOCK, msg_class
 
+from .signals import stop_on_signals
+
 NS = 1_000_000_000
 SPIN_TIMEOUT_S = 0.05
 FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed recorder keeps)
+
 
 
 def qos_dict(q: QoSProfile) -> dict[str, Any]:
@@ -101,17 +103,6 @@ def read_expected(path: Path) -> dict[str, int] | None:
         return None
     return {str(k): int(v) for k, v in json.loads(text).items()}
 
-
-def stop_on_signals() -> dict[str, bool]:
-    """SIGINT/SIGTERM set the returned dict's 'signal' flag (the main loop polls it). Not
-    node_util's: importing that pulls in the core (scipy), seconds of start-up."""
-    stop = {'signal': False}
-
-    def on_signal(signum: int, frame: object) -> None:
-        stop['signal'] = True
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
-    return stop
 
 
 def info(text: str) -> None:
