@@ -69,12 +69,17 @@ def unsigned_int(text: str) -> int:
     return value
 
 
+def number(text: str, kind: type[float] | type[int]) -> float:
+    """`text` as a float or int, or ros2bag's type error ("X is not the valid type (float)")."""
+    try:
+        return kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'{text} is not the valid type ({kind.__name__})') from None
+
+
 def check_positive_float(text: str) -> float:
     """ros2bag's ``check_positive_float``: a float > 0 (``--rate``)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text} is not the valid type (float)') from None
+    value = number(text, float)
     if value <= 0.0:
         raise argparse.ArgumentTypeError(f'{text} is not in the valid range (> 0.0)')
     return value
@@ -82,10 +87,7 @@ def check_positive_float(text: str) -> float:
 
 def check_not_negative_float(text: str) -> float:
     """ros2bag's ``check_not_negative_float``: a float >= 0 (``--start-offset``)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text} is not the valid type (float)') from None
+    value = number(text, float)
     if value < 0.0:
         raise argparse.ArgumentTypeError(f'Value {text} is less than zero.')
     return value
@@ -93,10 +95,7 @@ def check_not_negative_float(text: str) -> float:
 
 def check_not_negative_int(text: str) -> int:
     """ros2bag's ``check_not_negative_int``: an int >= 0 (``--wait-for-all-acked``)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text} is not the valid type (int)') from None
+    value = number(text, int)
     if value < 0:
         raise argparse.ArgumentTypeError(f'Value {value} is less than zero.')
     return value

@@ -9,6 +9,7 @@ from alignment_ros.cli_options import (
     bag_positive_float,
     check_not_negative_float,
     check_not_negative_int,
+    number,
 )
 
 LOSSLESS_ACK_TIMEOUT_MS = 30_000
@@ -24,10 +25,7 @@ def bag_path(text: str) -> str:
 
 def rate(text: str) -> float:
     """ros2bag's ``check_positive_float``, with 0 allowed (no pacing: an extension)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text} is not the valid type (float)') from None
+    value = number(text, float)
     if value < 0.0:
         raise argparse.ArgumentTypeError(f'{text} is not in the valid range (> 0.0)')
     return value
