@@ -154,7 +154,10 @@ def test_release_is_continuous_in_attitude_velocity_and_rate():
 @pytest.mark.parametrize('segments,sea,alpha', [
     (f'climb duration_s=20 climb_rate_mps=5 speed_mps={V}; level duration_s=5; turn duration_s=20 bank_deg=30; '
      'turn duration_s=10 bank_deg=-45 transition_s=2.345 climb_rate_mps=-3; level transition_s=1.111', 4, 3.0),
-], ids=['climb-turns-rollout'])
+    (f'climb duration_s=20 climb_rate_mps=5 speed_mps={V} alpha_deg=12 beta_deg=4; '
+     'turn duration_s=20 bank_deg=30 alpha_deg=-6 beta_deg=-8 transition_s=2.345; '
+     'level transition_s=1.111 alpha_deg=2 beta_deg=0', 4, 3.0),
+], ids=['climb-turns-rollout', 'air-angle-sweeps'])
 def test_ins_consistency_through_the_flight(segments, sea, alpha):
     sc, truth, imu, tau = run(segments, RELEASE + 70.0, ship__sea_state=sea, aircraft__flight__alpha_deg=alpha)
     att, vel = integrate(sc, truth, imu)
@@ -193,6 +196,10 @@ def test_batch_equals_step_in_flight():
     ('level duration_s=2; level', r'transition \(3.0 s\) must fit'),
     ('climb duration_s=10 climb_rate_mps=80 speed_mps=60', 'must be below'),
     ('climb duration_s=10 climb_rate_mps=80', 'must be below the speed'),     # at the release (64 m/s)
+    ('level duration_s=10 speed_mps=2501', r'speed_mps must be in \[1, 2500\]'),
+    ('level duration_s=10 alpha_deg=-61', r'alpha_deg must be within \[-60, 60\]'),
+    ('climb duration_s=10 pitch_deg=5 beta_deg=30.5', r'beta_deg must be within \[-30, 30\]'),
+    ('level duration_s=10 alpha_deg=big', 'alpha_deg must be a number'),
 ])
 def test_invalid_segments_fail_clearly(segments, msg):
     with pytest.raises(ConfigError, match=msg) as e:

@@ -189,14 +189,12 @@ class FadsSolver:
         """d(alpha, beta, M, p_inf)/dp of this solve: (..., 4, n), central differences with a
         step of 1e-6 of the largest port pressure unless given."""
         p = np.asarray(pressures, dtype=float)
-        h = (1e-6 * np.max(np.abs(p), axis=-1) if step_pa is None else np.full(p.shape[:-1], step_pa))[..., None]
-        cols = []
-        for j in range(p.shape[-1]):
-            e = np.zeros(p.shape[-1])
-            e[j] = 1.0
-            hi, lo = self.solve(p + h * e).vector(), self.solve(p - h * e).vector()
-            cols.append((hi - lo) / (2.0 * h))
-        return np.stack(cols, axis=-1)
+        n = p.shape[-1]
+        h = (1e-6 * np.max(np.abs(p), axis=-1) if step_pa is None else np.full(p.shape[:-1], step_pa))
+        steps = h[..., None, None] * np.eye(n)                                   # (..., n, n)
+        both = self.solve(np.concatenate([p[..., None, :] + steps, p[..., None, :] - steps], axis=-2)).vector()
+        diff = (both[..., :n, :] - both[..., n:, :]) / (2.0 * h[..., None, None])   # (..., n, 4)
+        return np.swapaxes(diff, -1, -2)
 
     def covariance(self, pressures: np.ndarray, port_cov: np.ndarray) -> np.ndarray:
         """J Sigma J^T (..., 4, 4) of this solve at `pressures` for port covariance Sigma (n, n)."""

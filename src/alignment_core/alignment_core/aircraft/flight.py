@@ -1,20 +1,27 @@
-"""Post-launch flight: the aircraft flies a list of segments (level, climb, turn) from its
-catapult release state, in the local-level ENU frame with Earth rotation and transport rate
-(the IMU quantities follow from this truth exactly as on the deck; see aircraft/kinematics.py).
+"""The flight: the aircraft flies a list of segments (level, climb, turn) from its catapult
+release state, or from an airborne start at the scenario start, in the local-level ENU frame
+with Earth rotation and transport rate (the IMU quantities follow from this truth exactly as on
+the deck; see aircraft/kinematics.py). Ground speeds up to 2500 m/s (Mach 7 at 20 km: 2066).
 
 Kinematics. Ground velocity v = (V_h cos chi, V_h sin chi, v_U): horizontal speed V_h,
 vertical speed v_U and track chi (ROS yaw: from East, counter-clockwise). Each segment sets
-targets; over its transition time T every quantity q of (V_h, v_U, chi') goes from its value
-at the segment start to the target as q0 + (q1 - q0) S(x), x = (t - t_i) / T, with the quintic
-smoothstep S(x) = 10x^3 - 15x^4 + 6x^5, so q, q' and q'' are continuous: specific force and
-body rates have no steps after the release. chi and the height h are closed-form integrals.
+targets; over its transition time T every quantity q of (V_h, v_U, chi', alpha, beta) goes
+from its value at the segment start to the target as q0 + (q1 - q0) S(x), x = (t - t_i) / T,
+with the quintic smoothstep S(x) = 10x^3 - 15x^4 + 6x^5, so q, q' and q'' are continuous:
+specific force and body rates have no steps after the release. chi and the height h are closed-form integrals.
 
-Attitude. C_a^n = Rz(chi) Ry(-gamma) Rx(mu) Ry(-alpha) exp([delta x]): velocity axes with the
-flight-path angle gamma = atan2(v_U, V_h); bank mu for a coordinated flight (the ball centred:
-no lateral specific force with the Earth taken flat and non-rotating),
+Attitude. C_a^n = C_v^n Rz(beta) Ry(-alpha) exp([delta x]), C_v^n = Rz(chi) Ry(-gamma) Rx(mu):
+velocity axes of the ground velocity (the path does not know the wind) with the flight-path
+angle gamma = atan2(v_U, V_h) and the bank mu for a coordinated flight (with beta = 0 the ball
+centred: no lateral specific force with the Earth taken flat and non-rotating),
   tan mu = -V_h chi' / (V gamma' + g cos gamma),
-which in a steady level turn is the textbook tan(bank) = V omega / g; angle of attack alpha
-(body x above the velocity; `alpha_deg`); delta blends the deck attitude at the release into
+which in a steady level turn is the textbook tan(bank) = V omega / g; mu stays within
+(-90, 90] deg: a pushover needing less than zero g (V gamma' < -g cos gamma, reached by a
+level-off at hypersonic speed) is flown upright at negative load, not rolled inverted.
+Angle of attack alpha and sideslip beta (`alpha_deg`, `beta_deg`): v in body axes is
+V (cos a cos b, -sin b, -sin a cos b) (air_data/flow_angles.py); body rate
+  w_na = Ry(alpha) Rz(-beta) w_v + (sin(alpha) beta', -alpha', cos(alpha) beta')
+with w_v the velocity axes' rate. delta blends the deck attitude at the release into
 the flight attitude over settle_s by a quintic Hermite (delta(0) and its rate chosen so the
 attitude and the body rate are continuous at the release; delta, delta', delta'' = 0 at the
 end). The Coriolis and transport terms (|2 omega_ie x v| ~ 0.01 m/s^2 at 60 m/s) are in the
@@ -25,13 +32,22 @@ Turns. A turn segment gives either `bank_deg` or `turn_rate_dps` (positive = to 
 heading increasing, ROS roll positive); the other follows from tan(bank) = V omega / g with V
 the segment's speed and g at the segment's start height (30 deg at 60 m/s: 5.4 deg/s; 10 deg/s
 at 60 m/s needs 46.9 deg). Climbs give one of `climb_rate_mps`, `flight_path_deg` or
-`pitch_deg` (= flight-path angle + alpha, wings level). `speed_mps` changes the ground speed
-(0 / absent: keep it). The last segment may have duration 0 (open: to the end of the run);
-after the last segment the aircraft keeps its final targets.
+`pitch_deg` (= flight-path angle + the segment's alpha, wings level; exact with beta = 0).
+`speed_mps` changes the ground speed (0 / absent: keep it). The last segment may have
+duration 0 (open: to the end of the run); after the last segment the aircraft keeps its
+final targets. Every segment may give
+`alpha_deg` (|alpha| <= 60) and `beta_deg` (|beta| <= 30), absent = keep the previous value;
+the flight starts at FlightConfig.alpha_deg and beta 0. With neither key anywhere the air
+angles are constant and the attitude is computed as before they existed (same floats).
 
 Position. lat' = v_N / (R_M + h), lon' = v_E / ((R_N + h) cos lat): RK4 on a 0.05 s grid
 (extended in 100 s chunks as needed, so a sample-by-sample caller gets the same numbers as a
-batch caller), cubic Hermite between grid points; h in closed form.
+batch caller), cubic Hermite between grid points; h in closed form. The grid's errors scale
+with the derivatives of the velocity, not with the speed (well below a millimetre at 2066 m/s).
+
+Airborne start (`start: airborne`, no catapult): the flight begins at the scenario start in
+level flight at start_speed_mps along start_track_deg, start_height_m above the tangent plane's
+origin latitude and longitude, already in the flight attitude (no settle blend: delta = 0).
 
 Segment syntax (one string, so it is one ROS parameter): segments separated by ';' or new
 lines, each `kind key=value ...`, e.g.
@@ -79,12 +95,22 @@ def _smooth(x):
             60.0 * x * (1.0 - x) * (1.0 - 2.0 * x), x**4 * (2.5 - 3.0 * x + x * x))
 
 
+def airborne_start(cfg: FlightConfig, plane: earth.TangentPlane) -> tuple[np.ndarray, np.ndarray]:
+    """ENU velocity (3,) and world position (3,) of an airborne start: level at start_speed_mps
+    along start_track_deg, start_height_m above the plane's origin latitude and longitude."""
+    lat, lon, _ = plane.to_geodetic(np.zeros(3))
+    chi = cfg.start_track_deg * DEG
+    v = cfg.start_speed_mps * np.array([math.cos(chi), math.sin(chi), 0.0])
+    return v, plane.from_geodetic(lat, lon, cfg.start_height_m)
+
+
 @dataclass
 class FlightState:
     """The aircraft's flight truth at times t (leading dims): attitude q (x, y, z, w) and C_a^n,
     body rate w.r.t. the nav frame w_na (aircraft axes), ENU ground velocity v_n and its nav-frame
     derivative a_n, body-axis velocity v_b, geodetic lat, lon (rad), h (m), world position p_w,
-    and the bank angle mu (rad, right wing down positive)."""
+    the bank angle mu (rad, right wing down positive) and the commanded angle of attack alpha
+    and sideslip beta (rad; those of v_b once the settle blend is over)."""
     q: np.ndarray
     c_na: np.ndarray
     w_na: np.ndarray
@@ -96,37 +122,46 @@ class FlightState:
     h: np.ndarray
     p_w: np.ndarray
     mu: np.ndarray
+    alpha: np.ndarray
+    beta: np.ndarray
 
 
 class FlightPath:
-    """The flight from the release (scenario time tau_release) through the segments."""
+    """The flight from scenario time tau_start through the segments, starting at the ENU
+    velocity v_start and world position p_start. With the deck attitude q_rel and body rate
+    w_rel at the release the attitude settles from them (settle_s); without (an airborne start)
+    it is the flight attitude from the start."""
 
-    def __init__(self, cfg: FlightConfig, plane: earth.TangentPlane, tau_release: float,
-                 q_rel: np.ndarray, w_rel: np.ndarray, v_rel: np.ndarray, p_rel: np.ndarray) -> None:
+    def __init__(self, cfg: FlightConfig, plane: earth.TangentPlane, tau_start: float,
+                 v_start: np.ndarray, p_start: np.ndarray,
+                 q_rel: np.ndarray | None = None, w_rel: np.ndarray | None = None) -> None:
         self.cfg = cfg
         self.plane = plane
-        self.t0 = float(tau_release)
-        lat, lon, h = plane.to_geodetic(np.asarray(p_rel, dtype=float))
+        self.t0 = float(tau_start)
+        lat, lon, h = plane.to_geodetic(np.asarray(p_start, dtype=float))
         self.lat0, self.lon0, self.h0 = float(lat), float(lon), float(h)
         self.alpha = cfg.alpha_deg * DEG
-        v = np.asarray(v_rel, dtype=float)
+        v = np.asarray(v_start, dtype=float)
         vh0 = math.hypot(v[0], v[1])
         if vh0 < 1.0:
             raise ConfigError(f"aircraft.flight: the release ground speed is {vh0:.3g} m/s; "
                               "a flight needs the catapult to launch the aircraft")
         self._schedule(cfg.parsed(), vh0, float(v[2]), math.atan2(v[1], v[0]))
-        # attitude blend from the deck attitude at the release
-        m = self._model(np.zeros(1))
-        self.delta0 = quat_to_rotvec(quat_mul(quat_conj(m['q'][0]), np.asarray(q_rel, dtype=float)))
-        e0 = rotvec_to_dcm_batch(self.delta0)
-        self.delta_rate0 = np.linalg.solve(right_jacobian(self.delta0), np.asarray(w_rel, dtype=float)
-                                           - e0.T @ m['w'][0])
+        self.settle = q_rel is not None
+        if self.settle:                          # attitude blend from the deck attitude at the release
+            m = self._model(np.zeros(1))
+            self.delta0 = quat_to_rotvec(quat_mul(quat_conj(m['q'][0]), np.asarray(q_rel, dtype=float)))
+            e0 = rotvec_to_dcm_batch(self.delta0)
+            self.delta_rate0 = np.linalg.solve(right_jacobian(self.delta0), np.asarray(w_rel, dtype=float)
+                                               - e0.T @ m['w'][0])
+        else:
+            self.delta0 = self.delta_rate0 = np.zeros(3)
         # position grid (lat, lon and their rates), extended on demand
         self._lat = np.array([self.lat0])
         self._lon = np.array([self.lon0])
         self._dlat = np.empty(0)
         self._dlon = np.empty(0)
-        rel = [self.cfg.settle_s] + list(self.t_start[1:]) + list(self.t_start + self.T)
+        rel = ([self.cfg.settle_s] if self.settle else []) + list(self.t_start[1:]) + list(self.t_start + self.T)
         self.breakpoints = self.t0 + np.unique([t for t in rel if 0.0 < t < np.inf])
 
     # ----- schedule -----
@@ -134,6 +169,8 @@ class FlightPath:
         n = max(len(segs), 1)
         t_start, T = np.zeros(n), np.full(n, self.cfg.transition_s)
         q_from, q_to = np.zeros((n, 3)), np.zeros((n, 3))          # (V_h, v_U, chi')
+        a_from, a_to = np.zeros((n, 2)), np.zeros((n, 2))          # (alpha, beta)
+        air = np.array([self.alpha, 0.0])
         chi_start, h_start = np.zeros(n), np.zeros(n)
         t, q, chi, h = 0.0, np.array([vh0, vu0, 0.0]), chi0, self.h0
         if not segs:                                               # not reached: '' = legacy free flight
@@ -142,6 +179,8 @@ class FlightPath:
             where = f"aircraft.flight.segments[{i}] ({s.kind})"
             T[i] = s.transition_s if s.transition_s is not None else self.cfg.transition_s
             speed = s.speed_mps if s.speed_mps is not None else math.hypot(q[0], q[1])
+            target = np.array([air[0] if s.alpha_deg is None else s.alpha_deg * DEG,
+                               air[1] if s.beta_deg is None else s.beta_deg * DEG])
             if s.climb_rate_mps is not None:
                 if abs(s.climb_rate_mps) >= speed:
                     raise ConfigError(f"{where}: |climb_rate_mps| = {abs(s.climb_rate_mps)} must be "
@@ -149,7 +188,7 @@ class FlightPath:
                 vu = s.climb_rate_mps
                 vh = math.sqrt(speed * speed - vu * vu)
             elif s.flight_path_deg is not None or s.pitch_deg is not None:
-                gam = s.flight_path_deg * DEG if s.flight_path_deg is not None else s.pitch_deg * DEG - self.alpha
+                gam = s.flight_path_deg * DEG if s.flight_path_deg is not None else s.pitch_deg * DEG - target[0]
                 vh, vu = speed * math.cos(gam), speed * math.sin(gam)
             else:
                 vh, vu = speed, 0.0
@@ -162,6 +201,8 @@ class FlightPath:
                 w = 0.0
             t_start[i], chi_start[i], h_start[i] = t, chi, h
             q_from[i], q_to[i] = q, (vh, vu, w)
+            a_from[i], a_to[i] = air, target
+            air = target
             if s.duration_s > 0.0 and i < len(segs) - 1:
                 _, _, _, integ = self._blend(np.array([s.duration_s]), T[i], q_from[i], q_to[i])
                 chi, h = chi + integ[0, 2], h + integ[0, 1]
@@ -170,11 +211,14 @@ class FlightPath:
         self.segments = segs
         self.t_start, self.T, self.q_from, self.q_to = t_start, T, q_from, q_to
         self.chi_start, self.h_start = chi_start, h_start
+        self.a_from, self.a_to = a_from, a_to
+        self.air_fixed = all(s.alpha_deg is None and s.beta_deg is None for s in segs)
 
     @staticmethod
     def _blend(tau, T, q0, q1):
         """Value, first and second derivative and integral since the segment start of the
-        blended (V_h, v_U, chi') at times tau since the segment start; T, q0, q1 per row."""
+        blended (V_h, v_U, chi') (or (alpha, beta)) at times tau since the segment start;
+        T, q0, q1 per row."""
         T = np.asarray(T, dtype=float)[..., None] if np.ndim(T) else T
         tau = tau[..., None]
         x = np.clip(tau / T, 0.0, 1.0)
@@ -183,17 +227,21 @@ class FlightPath:
         return (q0 + dq * S, dq * S1 / T, dq * S2 / (T * T),
                 q0 * tau + dq * (T * I + np.maximum(tau - T, 0.0)))
 
-    def _kinematics(self, t: np.ndarray) -> dict[str, np.ndarray]:
-        """(V_h, v_U, chi') with derivatives, chi and h at flight times t >= 0."""
+    def _kinematics(self, t: np.ndarray, air: bool = False) -> dict[str, np.ndarray]:
+        """(V_h, v_U, chi') with derivatives, chi and h at flight times t >= 0; with `air`
+        also (alpha, beta) and their rates."""
         i = np.clip(np.searchsorted(self.t_start, t, side='right') - 1, 0, len(self.t_start) - 1)
         tau = t - self.t_start[i]
         q, qd, qdd, integ = self._blend(tau, self.T[i], self.q_from[i], self.q_to[i])
-        return {'q': q, 'qd': qd, 'qdd': qdd, 'chi': self.chi_start[i] + integ[..., 2],
-                'h': self.h_start[i] + integ[..., 1]}
+        out = {'q': q, 'qd': qd, 'qdd': qdd, 'chi': self.chi_start[i] + integ[..., 2],
+               'h': self.h_start[i] + integ[..., 1]}
+        if air:
+            out['air'], out['aird'], _, _ = self._blend(tau, self.T[i], self.a_from[i], self.a_to[i])
+        return out
 
     def _model(self, t: np.ndarray) -> dict[str, np.ndarray]:
-        """Velocity-axes attitude (no settle blend), its body rate, velocity and acceleration."""
-        k = self._kinematics(t)
+        """Flight attitude (no settle blend), its body rate, velocity and acceleration."""
+        k = self._kinematics(t, air=not self.air_fixed)
         (vh, vu, w), (vhd, vud, wd), (vhdd, vudd, _) = (np.moveaxis(k[x], -1, 0) for x in ('q', 'qd', 'qdd'))
         chi, h = k['chi'], k['h']
         V2 = vh * vh + vu * vu
@@ -209,20 +257,32 @@ class FlightPath:
         Nd = -(vhd * w + vh * wd)
         D = V * gd + g * cg
         Dd = Vd * gd + V * gdd + dgdh * vu * cg - g * sg * gd
-        mu = np.arctan2(N, D)
+        mu = np.where(D < 0.0, np.arctan2(-N, -D), np.arctan2(N, D))   # upright below zero g
         mud = (D * Nd - N * Dd) / (N * N + D * D)
-        q = quat_mul_batch(quat_mul_batch(axis_quat_batch(chi, 2), axis_quat_batch(-gam, 1)),
-                           quat_mul_batch(axis_quat_batch(mu, 0), axis_quat_batch(np.full_like(mu, -self.alpha), 1)))
-        # body rate: chi' about the nav z, -gamma' about the velocity-axes y, mu' about x, then alpha
+        q_path = quat_mul_batch(axis_quat_batch(chi, 2), axis_quat_batch(-gam, 1))
+        # velocity-axes rate b: chi' about the nav z, -gamma' about the path y, mu' about x
         a0, a1, a2 = w * sg, -gd, w * cg
         cm, sm = np.cos(mu), np.sin(mu)
         b0, b1, b2 = a0 + mud, cm * a1 + sm * a2, -sm * a1 + cm * a2
-        ca, sa = math.cos(self.alpha), math.sin(self.alpha)
-        w_m = np.stack([ca * b0 + sa * b2, b1, -sa * b0 + ca * b2], axis=-1)
+        if self.air_fixed:                       # constant alpha, beta = 0: the original floats
+            q = quat_mul_batch(q_path, quat_mul_batch(axis_quat_batch(mu, 0),
+                                                      axis_quat_batch(np.full_like(mu, -self.alpha), 1)))
+            ca, sa = math.cos(self.alpha), math.sin(self.alpha)
+            w_m = np.stack([ca * b0 + sa * b2, b1, -sa * b0 + ca * b2], axis=-1)
+            alpha, beta = np.full_like(mu, self.alpha), np.zeros_like(mu)
+        else:
+            (alpha, beta), (ad, bd) = np.moveaxis(k['air'], -1, 0), np.moveaxis(k['aird'], -1, 0)
+            q = quat_mul_batch(q_path, quat_mul_batch(axis_quat_batch(mu, 0), quat_mul_batch(
+                axis_quat_batch(beta, 2), axis_quat_batch(-alpha, 1))))
+            # Ry(alpha) Rz(-beta) b + (sin(alpha) beta', -alpha', cos(alpha) beta')
+            cb, sb = np.cos(beta), np.sin(beta)
+            u0, u1, u2 = cb * b0 + sb * b1, -sb * b0 + cb * b1, b2 + bd
+            ca, sa = np.cos(alpha), np.sin(alpha)
+            w_m = np.stack([ca * u0 + sa * u2, u1 - ad, -sa * u0 + ca * u2], axis=-1)
         cc, sc = np.cos(chi), np.sin(chi)
         v_n = np.stack([vh * cc, vh * sc, vu], axis=-1)
         a_n = np.stack([vhd * cc - vh * w * sc, vhd * sc + vh * w * cc, vud], axis=-1)
-        return {'q': q, 'w': w_m, 'v_n': v_n, 'a_n': a_n, 'h': h, 'mu': mu}
+        return {'q': q, 'w': w_m, 'v_n': v_n, 'a_n': a_n, 'h': h, 'mu': mu, 'alpha': alpha, 'beta': beta}
 
     # ----- position -----
     def _extend(self) -> None:
@@ -281,21 +341,24 @@ class FlightPath:
         tau = np.asarray(tau, dtype=float)
         t = tau - self.t0
         m = self._model(t)
-        x = np.clip(t / self.cfg.settle_s, 0.0, 1.0)[..., None]
-        S, S1, _, _ = _smooth(x)
-        h1 = x - 6.0 * x**3 + 8.0 * x**4 - 3.0 * x**5
-        h1d = 1.0 - 18.0 * x**2 + 32.0 * x**3 - 15.0 * x**4
-        ts = self.cfg.settle_s
-        delta = self.delta0 * (1.0 - S) + ts * self.delta_rate0 * h1
-        delta_d = -self.delta0 * S1 / ts + self.delta_rate0 * h1d
-        q = quat_mul_batch(m['q'], rotvec_to_quat_batch(delta))
+        if self.settle:
+            x = np.clip(t / self.cfg.settle_s, 0.0, 1.0)[..., None]
+            S, S1, _, _ = _smooth(x)
+            h1 = x - 6.0 * x**3 + 8.0 * x**4 - 3.0 * x**5
+            h1d = 1.0 - 18.0 * x**2 + 32.0 * x**3 - 15.0 * x**4
+            ts = self.cfg.settle_s
+            delta = self.delta0 * (1.0 - S) + ts * self.delta_rate0 * h1
+            delta_d = -self.delta0 * S1 / ts + self.delta_rate0 * h1d
+            q = quat_mul_batch(m['q'], rotvec_to_quat_batch(delta))
+            e = rotvec_to_dcm_batch(delta)
+            w_na = (np.einsum('...ji,...j->...i', e, m['w'])
+                    + np.einsum('...ij,...j->...i', right_jacobian(delta), delta_d))
+        else:
+            q, w_na = m['q'], m['w']
         c_na = quat_to_dcm_batch(q)
-        e = rotvec_to_dcm_batch(delta)
-        w_na = (np.einsum('...ji,...j->...i', e, m['w'])
-                + np.einsum('...ij,...j->...i', right_jacobian(delta), delta_d))
         lat, lon = self._latlon(t)
         h = m['h']
         p_w = self.plane.from_geodetic(lat, lon, h)
         v_b = np.einsum('...ji,...j->...i', c_na, m['v_n'])
         return FlightState(q=q, c_na=c_na, w_na=w_na, v_n=m['v_n'], a_n=m['a_n'], v_b=v_b,
-                           lat=lat, lon=lon, h=h, p_w=p_w, mu=m['mu'])
+                           lat=lat, lon=lon, h=h, p_w=p_w, mu=m['mu'], alpha=m['alpha'], beta=m['beta'])

@@ -8,6 +8,8 @@ aircraft's x axis, u = C_a^s e_x; on it the aircraft moves r(t) = r0 + s(t) u (c
 hold-back creep, then the stroke's acceleration profile). After the release it either keeps
 its release velocity and attitude (constant in the nav frame; `aircraft.flight.segments` '')
 or flies a segment list (aircraft/flight.py: climbs, turns, with Earth rate and transport rate).
+With `aircraft.flight.start: airborne` (catapult disabled) there is no deck phase: the flight
+starts at the scenario start (flight.airborne_start) and every sample is in flight.
 
 Ideal increments are integrals over each sample interval of omega_ib^a and f^a evaluated by
 3-point Gauss-Legendre quadrature on the ship state, which is interpolated inside the
@@ -39,7 +41,7 @@ from scipy.spatial.transform import Rotation
 
 from alignment_core.aircraft.catapult import CatapultConfig, CatapultMotion, check_catapult_grid
 from alignment_core.aircraft.deck_flexure import FlexureConfig, FlexureProcess
-from alignment_core.aircraft.flight import FlightPath
+from alignment_core.aircraft.flight import FlightPath, airborne_start
 from alignment_core.aircraft.flight_config import FlightConfig
 from alignment_core.aircraft.vibration import Vibration, VibrationConfig
 from alignment_core.geometry import earth
@@ -88,12 +90,14 @@ class AircraftConfig:
                 f"misalignment_random_arcmin must be in [0, 120], got {self.misalignment_random_arcmin}")
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
                 f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
+        require(self.flight.start == 'deck' or not self.catapult.enabled,
+                "flight.start airborne has no deck phase: set catapult.enabled false")
 
 
 class AircraftKinematics:
     """Relative motion on the deck, release state and ideal IMU increments. With flight
-    segments, `path` (flight.FlightPath, set when the release sample is seen) gives
-    the flight truth at any time after the release: `path.state(tau)`."""
+    segments, `path` (flight.FlightPath, set when the release sample is seen, or at once for
+    an airborne start) gives the flight truth at any time after the release: `path.state(tau)`."""
 
     def __init__(self, cfg: AircraftConfig, plane: earth.TangentPlane, rate_hz: float,
                  output: str = 'increment', seed: int = 0) -> None:
@@ -121,6 +125,9 @@ class AircraftKinematics:
         self.release_state: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self.flying = bool(cfg.flight.parsed())                          # segments given
         self.path: FlightPath | None = None                              # set at the release
+        if cfg.flight.start == 'airborne':                               # in flight from tau = 0
+            self.release = -np.inf
+            self.path = FlightPath(cfg.flight, plane, 0.0, *airborne_start(cfg.flight, plane))
         vib = cfg.vibration
         self.vib = Vibration(vib, self.launch) if (vib.enabled and cat.enabled) else None
         self.vib_motion = self.vib is not None and vib.mode == 'motion'
@@ -174,6 +181,10 @@ class AircraftKinematics:
                     + np.einsum('...ij,...j->...i', right_jacobian(flex[0]), flex[1]))
         return c_na, w_na, v_p, a_p, p_p
 
+    def _check_released(self) -> None:
+        if self.release_state is None:
+            raise RuntimeError('free flight before the release state was seen')
+
     def _free(self, tau):
         c_rel, v_rel, p_rel = self.release_state
         tau = np.asarray(tau, dtype=float)
@@ -226,12 +237,11 @@ class AircraftKinematics:
                 self.release_quat = q[k].copy() if self.flex is not None else quat_mul_batch(sb.q_nb[k], self.q_sa)
                 self.release_v_world = self.plane.c_local_to_world(p_p[k]) @ v_p[k]
                 if self.flying and self.path is None:
-                    self.path = FlightPath(self.cfg.flight, self.plane, tau[k], self.release_quat,
-                                           w_na[k], v_p[k], p_p[k])
+                    self.path = FlightPath(self.cfg.flight, self.plane, tau[k], v_p[k], p_p[k],
+                                           self.release_quat, w_na[k])
         if np.any(~on):
-            if self.release_state is None:
-                raise RuntimeError('free flight before the release state was seen')
             if self.path is None:
+                self._check_released()
                 c_na[~on], w_na[~on], v_p[~on], _, p_p[~on] = self._free(tau[~on])
                 q[~on] = self.release_quat
             else:
@@ -260,9 +270,8 @@ class AircraftKinematics:
         f = np.empty(tau.shape + (3,))
         free = tau0 >= self.release
         if np.any(free):
-            if self.release_state is None:
-                raise RuntimeError('free flight before the release state was seen')
             if self.path is None:
+                self._check_released()
                 w_ib[free], f[free] = self._imu(*self._free(tau[free]))
             else:
                 w_ib[free], f[free] = 0.0, 0.0                           # replaced below
@@ -359,9 +368,8 @@ class AircraftKinematics:
         f = np.empty((len(h), 3))
         free = tau0 >= self.release
         if np.any(free):
-            if self.release_state is None:
-                raise RuntimeError('free flight before the release state was seen')
             if self.path is None:
+                self._check_released()
                 w_ib[free], f[free] = self._imu(*self._free(tau1[free]))
             else:
                 w_ib[free], f[free] = self._flight_state_imu(tau1[free])

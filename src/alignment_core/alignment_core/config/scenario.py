@@ -18,11 +18,14 @@ import yaml
 
 from alignment_core.aircraft.kinematics import AircraftConfig, check_catapult_grid
 from alignment_core.config.given import Scope, fill_defaults, with_overrides, within
+from alignment_core.estimation.air_data.config import AirDataFilterConfig
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.sensors.doppler_radar import DopplerConfig
+from alignment_core.sensors.fads_config import FadsConfig
 from alignment_core.sensors.imu import ImuConfig
 from alignment_core.sensors.ldv import LdvConfig
 from alignment_core.sensors.master_ins import MasterConfig
+from alignment_core.sensors.reference_ins import ReferenceInsConfig
 from alignment_core.sensors.timing import check_rate
 from alignment_core.ship.config import ShipConfig
 from alignment_core.validation import ConfigError, build, require, to_dict
@@ -44,6 +47,9 @@ class Scenario:
     ldv: LdvConfig = field(default_factory=LdvConfig)
     doppler: DopplerConfig = field(default_factory=DopplerConfig)
     filter: FilterConfig = field(default_factory=FilterConfig)
+    fads: FadsConfig = field(default_factory=FadsConfig)
+    reference_ins: ReferenceInsConfig = field(default_factory=ReferenceInsConfig)
+    air_data_filter: AirDataFilterConfig = field(default_factory=AirDataFilterConfig)
 
     def validate(self, covers: Callable[[str], bool] = lambda key: True) -> None:
         """Ranges and consistency. `covers` (a node's scope) limits the checks to those whose

@@ -6,7 +6,10 @@ addition, callables:
     update_nonlinear(z, hfun, r, gate_chi2=None, jac=None)   z = hfun(x) + v,  v ~ N(0, R)
 
 fun and hfun map one state (n,) to (n,) / (m,). jac (EKF only) returns the Jacobian at x; without
-it the EKF uses central differences with steps 1e-3 sigma_j (base.numerical_jacobian).
+it the EKF uses central differences with steps 1e-3 sigma_j (base.numerical_jacobian). A callable
+with the attribute `vectorized = True` maps a batch of states (N, n) to (N, n) / (N, m) instead:
+the sigma-point filters then evaluate all their points in one call (same numbers, far fewer
+Python calls).
 
 For linear maps the sigma-point rules are exact (they integrate polynomials of degree 3, and
 degree 2 exactly is all a linear-Gaussian step needs), so the linear predict/update of UKF and
@@ -35,24 +38,42 @@ Fn = Callable[[np.ndarray], np.ndarray]
 _dot = np.dot
 
 
+def _evaluate(fun: Fn, pts: np.ndarray) -> np.ndarray:
+    """fun at every row of pts (N, n): one call if fun is vectorized, else one per row."""
+    if getattr(fun, 'vectorized', False):
+        return np.asarray(fun(pts), dtype=float)
+    return np.array([fun(p) for p in pts], dtype=float)
+
+
+def _jacobian(fun: Fn, x: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """Central differences of fun at x (base.numerical_jacobian), all 2n points in one call
+    when fun is vectorized."""
+    if not getattr(fun, 'vectorized', False):
+        return numerical_jacobian(fun, x, step)
+    e = np.diag(step)
+    y = _evaluate(fun, np.concatenate([x + e, x - e]))
+    n = x.size
+    return ((y[:n] - y[n:]) / (2.0 * step[:, None])).T
+
+
 class ExtendedKalmanFilter(KalmanFilter):
     """EKF: the KalmanFilter (Joseph update) linearised about the current estimate."""
 
     def predict_nonlinear(self, fun: Fn, qd: np.ndarray, jac: Fn | None = None) -> None:
         x = self.x
-        phi = jac(x) if jac is not None else numerical_jacobian(fun, x, jacobian_steps(x, self.P))
+        phi = jac(x) if jac is not None else _jacobian(fun, x, jacobian_steps(x, self.P))
         phi = as_dtype(phi, self.dtype)
-        self.x = as_dtype(fun(x), self.dtype).copy()
+        self.x = as_dtype(_evaluate(fun, x[None, :])[0], self.dtype).copy()
         self.P = _dot(_dot(phi, self.P), phi.T) + as_dtype(qd, self.dtype)
         self.n_predicts += 1
 
     def update_nonlinear(self, z: np.ndarray, hfun: Fn, r: np.ndarray, gate_chi2: float | None = None,
                          jac: Fn | None = None) -> UpdateResult:
         x = self.x
-        h = jac(x) if jac is not None else numerical_jacobian(hfun, x, jacobian_steps(x, self.P))
+        h = jac(x) if jac is not None else _jacobian(hfun, x, jacobian_steps(x, self.P))
         dt = self.dtype
         h, r = as_dtype(h, dt), as_dtype(r, dt)
-        y = as_dtype(z, dt) - as_dtype(hfun(x), dt)
+        y = as_dtype(z, dt) - as_dtype(_evaluate(hfun, x[None, :])[0], dt)
         ph = _dot(self.P, h.T)
         s = _dot(h, ph) + r
         s_inv = inv(s)
@@ -107,7 +128,7 @@ class _SigmaPointFilter(Counters):
 
     def predict_nonlinear(self, fun: Fn, qd: np.ndarray, jac: Fn | None = None) -> None:
         pts, wm, wc = self.sigma_points(self.x, self.P)
-        y = np.array([fun(p) for p in pts], dtype=float)
+        y = _evaluate(fun, pts)
         xm = _dot(wm, y)
         dy = y - xm
         p = _dot(dy.T * wc, dy) + qd
@@ -138,7 +159,7 @@ class _SigmaPointFilter(Counters):
                          jac: Fn | None = None) -> UpdateResult:
         """Points redrawn from the predicted (x, P), so the cross-covariance includes Qd."""
         pts, wm, wc = self.sigma_points(self.x, self.P)
-        zs = np.array([hfun(p) for p in pts], dtype=float)
+        zs = _evaluate(hfun, pts)
         zm = _dot(wm, zs)
         dz = zs - zm
         dx = pts - self.x
