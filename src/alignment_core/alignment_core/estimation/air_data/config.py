@@ -9,6 +9,7 @@ from alignment_core.validation import require
 
 FORMS = ('paper', 'tight')
 ALGORITHMS = ('ekf', 'ukf', 'ckf')
+INS_SOURCES = ('aligned', 'reference')
 
 
 @dataclass(frozen=True)
@@ -32,9 +33,12 @@ class AirDataFilterConfig:
     the INS attitude error (its covariance comes with each INS solution) tilts gravity into the
     specific force: a Gauss-Markov error of correlation time `ins_error_time_s` (the INS's
     specification) enters as white noise of the same low-frequency power, 2 sigma^2 tau.
-    Frames whose NIS exceeds `gate_chi2` are rejected (both forms)."""
+    Frames whose NIS exceeds `gate_chi2` are rejected (both forms). `ins_source`: the INS the
+    estimator reads, 'aligned' (the transfer-aligned slave INS, /alignment/odom) or 'reference'
+    (a reference INS, /reference_ins/odom: scenarios without a deck phase)."""
     form: str = 'tight'
     algorithm: str = 'ckf'
+    ins_source: str = 'aligned'
     port_sigma_pa: float = 20.0
     port_correlation: float = 0.5
     port_white_sigma_pa: float = 0.5
@@ -59,6 +63,8 @@ class AirDataFilterConfig:
 
     def validate(self) -> None:
         require(self.form in FORMS, f"form must be one of {', '.join(FORMS)}, got {self.form!r}")
+        require(self.ins_source in INS_SOURCES,
+                f"ins_source must be one of {', '.join(INS_SOURCES)}, got {self.ins_source!r}")
         require(self.algorithm in ALGORITHMS,
                 f"algorithm must be one of {', '.join(ALGORITHMS)}, got {self.algorithm!r}")
         for name in ('port_sigma_pa', 'port_white_sigma_pa', 'wind_sigma_mps', 'static_offset_sigma',
