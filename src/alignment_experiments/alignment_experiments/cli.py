@@ -6,7 +6,8 @@ import argparse
 import time
 from pathlib import Path
 
-from . import monte_carlo, report, results
+from . import air_data_runs, monte_carlo, report, results
+from .air_data_catalogue import AIR_DATA_EXPERIMENTS
 from .catalogue import CATALOGUE
 
 
@@ -23,15 +24,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument('--out', type=Path, default=None, help='output directory (default runs/experiments/NAME)')
     a = ap.parse_args(argv)
     if a.list or not a.name:
-        for e in CATALOGUE.experiments.values():
+        for e in [*CATALOGUE.experiments.values(), *AIR_DATA_EXPERIMENTS.values()]:
             print(f'{e.name:18s} {e.title}')
         return 0
+    if a.seeds is not None and a.seeds < 1:
+        ap.error('--seeds must be >= 1')
+    if a.name in AIR_DATA_EXPERIMENTS:
+        return _air_data(a)
     try:
         exp = CATALOGUE.get(a.name)
     except KeyError as e:
         ap.error(str(e.args[0]))
-    if a.seeds is not None and a.seeds < 1:
-        ap.error('--seeds must be >= 1')
     if a.quick:
         exp = exp.quick(seeds=a.seeds or 2)
     seeds = a.seeds or exp.seeds
@@ -46,6 +49,24 @@ def main(argv: list[str] | None = None) -> int:
     results.write(out, exp, outcomes, seeds, a.first_seed, wall, a.workers, version)
     path = report.write_report(out, exp, outcomes, seeds, a.first_seed)
     print(f'{len(specs)} runs in {wall:.1f} s ({60 * len(specs) / wall:.1f} runs/min); report: {path}')
+    return 0
+
+
+def _air_data(a: argparse.Namespace) -> int:
+    """An air-data experiment (air_data_runs.py): same options, its own files."""
+    exp = AIR_DATA_EXPERIMENTS[a.name]
+    if a.quick:
+        exp = exp.quick(seeds=a.seeds or 2)
+    seeds = a.seeds or exp.seeds
+    out = a.out or Path('runs') / 'experiments' / (exp.name + ('_quick' if a.quick else ''))
+    print(f'{exp.name}: {len(exp.cells)} cells x {seeds} seeds, {a.workers} workers -> {out}')
+    version = results.code_version()
+    wall = time.perf_counter()
+    rows = air_data_runs.run_all(exp, seeds, a.first_seed, a.workers)
+    wall = time.perf_counter() - wall
+    air_data_runs.write(out, exp, rows, seeds, a.first_seed, wall, a.workers, version)
+    path = air_data_runs.report(out, exp, rows, seeds)
+    print(f'{len(rows)} runs in {wall:.1f} s; report: {path}')
     return 0
 
 

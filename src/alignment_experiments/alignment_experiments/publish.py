@@ -20,6 +20,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from .air_data_catalogue import AIR_DATA_EXPERIMENTS, AirDataExperiment
 from .catalogue import CATALOGUE, Experiment
 
 ROOT = Path(os.environ.get('ALIGN_ROOT') or Path(__file__).resolve().parents[3])
@@ -83,7 +84,12 @@ def compact_table(report_md: str) -> str:
     return _table([[r[i] for i in keep] for r in rows])
 
 
-def stamp(exp: Experiment, out: Path) -> str:
+def experiments() -> dict[str, Experiment | AirDataExperiment]:
+    """Every published experiment, by name: the alignment catalogue's, then the air-data ones."""
+    return {**CATALOGUE.experiments, **AIR_DATA_EXPERIMENTS}
+
+
+def stamp(exp: Experiment | AirDataExperiment, out: Path) -> str:
     """Commit, date, command and core count of the run in `out`, from its own files (meta.json holds
     the commit and seeds the run used, timing.json its workers; the date is that of runs.csv)."""
     meta = json.loads((out / 'meta.json').read_text())
@@ -93,7 +99,7 @@ def stamp(exp: Experiment, out: Path) -> str:
             f"--workers {timing['workers']}`, {os.cpu_count()} cores")
 
 
-def section(exp: Experiment, out: Path, quick_out: Path, stamp_line: str) -> str:
+def section(exp: Experiment | AirDataExperiment, out: Path, quick_out: Path, stamp_line: str) -> str:
     """This experiment's part of docs/results.md (its plots copied to docs/img/results/)."""
     rep = _sections((out / 'report.md').read_text())
     md = [f'## {exp.title}', '', f'<a id="{exp.name}"></a>', exp.description, '', f'Made by {stamp_line}.', '',
@@ -111,7 +117,7 @@ def section(exp: Experiment, out: Path, quick_out: Path, stamp_line: str) -> str
     return '\n'.join(md)
 
 
-def readme_block(exp: Experiment, out: Path, stamp_line: str) -> str:
+def readme_block(exp: Experiment | AirDataExperiment, out: Path, stamp_line: str) -> str:
     md = [compact_table((out / 'report.md').read_text()), '',
           f'({exp.name}; made by {stamp_line}; all columns, the paper comparison and plots in '
           f'[docs/results.md](docs/results.md#{exp.name}).)']
@@ -138,14 +144,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument('--workers', type=int, default=2)
     ap.add_argument('--render-only', action='store_true', help='do not run; render from runs/results/')
     a = ap.parse_args(argv)
-    names = a.names or list(CATALOGUE.experiments)
+    known = experiments()
+    names = a.names or list(known)
     for n in names:
-        CATALOGUE.get(n)
+        if n not in known:
+            ap.error(f"unknown experiment {n!r} (known: {', '.join(known)})")
     if not a.render_only:
         for n in names:
             _run([n, '--workers', str(a.workers), '--out', str(OUT_DIR / n)])
             _run([n, '--quick', '--workers', str(a.workers), '--out', str(OUT_DIR / f'{n}_quick')])
-    missing = [n for n in CATALOGUE.experiments
+    missing = [n for n in known
                if not all((OUT_DIR / d / f).exists() for d in (n, f'{n}_quick') for f in ('report.md', 'meta.json'))]
     if missing:
         ap.error(f"no outputs for {', '.join(missing)}: run scripts/results.sh {' '.join(missing)}")
@@ -157,7 +165,7 @@ def main(argv: list[str] | None = None) -> int:
              'with the old number here. Errors in arcmin; ROS FLU aircraft axes (roll = x, pitch = y, yaw = z) '
              'unless the table says E/N/U. The papers are identified in [references.md](references.md).', '']
     blocks = {}
-    for n, exp in CATALOGUE.experiments.items():
+    for n, exp in known.items():
         made_by = stamp(exp, OUT_DIR / n)
         parts.append(section(exp, OUT_DIR / n, OUT_DIR / f'{n}_quick', made_by))
         blocks[n] = readme_block(exp, OUT_DIR / n, made_by)

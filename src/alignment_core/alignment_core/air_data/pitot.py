@@ -8,12 +8,11 @@ qc is not the dynamic pressure q = (gamma/2) p_inf M^2: it is what a pitot port 
       (qc + p_inf) / p_inf = K M^(2 gamma/(gamma-1)) (2 gamma M^2 - (gamma-1))^(-1/(gamma-1)),
       K = ((gamma+1)^2 / 2)^(gamma/(gamma-1)) / (gamma+1)  (gamma 1.4: 166.92158 M^7 / (7 M^2 - 1)^2.5)
 Both branches give 0.892929 and the same slope at M = 1, so qc/p_inf is C1 and increasing in
-M; the inverse is closed form below M = 1 and a bracketing root (scipy brentq) above.
+M; the inverse is closed form below M = 1 and a bracketing root (bisection) above.
 """
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
 
 from alignment_core.air_data.atmosphere import A0, GAMMA, P0, R_AIR
 
@@ -54,19 +53,34 @@ def impact_pressure(mach: np.ndarray | float, p_inf: np.ndarray | float, gamma: 
 
 def mach_from_impact_ratio(ratio: np.ndarray | float, gamma: float = GAMMA) -> np.ndarray:
     """The Mach number whose qc/p_inf is `ratio` (any shape). Non-positive ratios give 0 (no
-    flow); subsonic in closed form, supersonic by brentq on [1, MACH_MAX] to ~1e-15."""
+    flow); subsonic in closed form, supersonic by 8 bisection steps on [1, MACH_MAX] (the
+    Rayleigh ratio increases with M) then Newton steps kept inside the bracket, all elements
+    at once, to round-off."""
     r = np.asarray(ratio, dtype=float)
     e = gamma / (gamma - 1.0)
     out = np.sqrt(np.maximum((np.maximum(r, 0.0) + 1.0) ** (1.0 / e) - 1.0, 0.0) * 2.0 / (gamma - 1.0))
-    sonic = _sonic_ratio(gamma)
-    flat_r, flat_out = r.reshape(-1), out.reshape(-1)
-    for i in np.flatnonzero(flat_r > sonic):
-        target = float(flat_r[i])
-        if target >= float(impact_pressure_ratio(MACH_MAX, gamma)):
-            raise ValueError(f"qc/p_inf = {target} is beyond Mach {MACH_MAX}")
-        flat_out[i] = brentq(lambda m, t=target: float(impact_pressure_ratio(m, gamma)) - t,
-                             1.0, MACH_MAX, xtol=1e-15, rtol=1e-15, maxiter=200)
-    return flat_out.reshape(r.shape)
+    sup = r > _sonic_ratio(gamma)
+    if not np.any(sup):
+        return out
+    target = r[sup]
+    if np.any(target >= float(impact_pressure_ratio(MACH_MAX, gamma))):
+        raise ValueError(f"qc/p_inf = {float(np.max(target))} is beyond Mach {MACH_MAX}")
+    lo, hi = np.ones_like(target), np.full_like(target, MACH_MAX)
+    for _ in range(8):
+        mid = 0.5 * (lo + hi)
+        up = impact_pressure_ratio(mid, gamma) > target
+        hi, lo = np.where(up, mid, hi), np.where(up, lo, mid)
+    m = 0.5 * (lo + hi)
+    for _ in range(30):
+        step = (impact_pressure_ratio(m, gamma) - target) / impact_pressure_ratio_slope(m, gamma)
+        m_new = np.clip(m - step, lo, hi)
+        if np.all(np.abs(m_new - m) <= 4e-16 * m_new):
+            m = m_new
+            break
+        m = m_new
+    out = np.array(out, dtype=float)
+    out[sup] = m
+    return out
 
 
 def dynamic_pressure(mach: np.ndarray | float, p_inf: np.ndarray | float, gamma: float = GAMMA) -> np.ndarray:
