@@ -13,6 +13,7 @@ rate noises are white per IMU sample, the seed's "accuracy" figures."""
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import numpy as np
 
@@ -61,7 +62,7 @@ class PaperAirDataFilter:
     def __init__(self, cfg: AirDataFilterConfig, model: PortModel, imu_interval_s: float) -> None:
         cfg.validate()
         self.cfg, self.model = cfg, model
-        branch = 'paper' if cfg.paper_branch else 'atan2'
+        branch: Literal['paper', 'atan2'] = 'paper' if cfg.paper_branch else 'atan2'
         self.solver = FadsSolver(model, alpha_branch=branch, epsilon_iteration='fixed_point')
         # the solve's Jacobian: the root form of the same equations has the same fixed point
         # and so the same derivative, at a fraction of the iteration's cost
