@@ -49,3 +49,12 @@ def test_compact_table_keeps_the_readers_columns():
     rows = publish.compact_table(REPORT).splitlines()
     assert rows[0] == '| filter | RMS r/p/y | mean 1σ r/p/y | NEES [95 %] |'
     assert rows[2] == '| kf | 0.1/0.2/0.3 | 0.1/0.2/0.3 | 3.00 [2.36, 3.72] |'
+
+
+def test_published_sections_are_kept_verbatim_by_name():
+    md = ('# Results\n\nintro\n\n## First\n\n<a id="one"></a>\nbody 1\n\n### sub\n\nmore\n'
+          '<!-- quick-digest one sha256=' + '0' * 64 + ' -->\n\n## Second\n\n<a id="two"></a>\nbody 2\n')
+    s = publish.published_sections(md)
+    assert list(s) == ['one', 'two']
+    assert s['one'].startswith('## First') and '### sub' in s['one'] and 'quick-digest one' in s['one']
+    assert s['two'] == '## Second\n\n<a id="two"></a>\nbody 2\n'
