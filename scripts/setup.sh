@@ -42,7 +42,12 @@ export PATH="$VENV/bin:\$PATH"
 export LD_LIBRARY_PATH="$LIBS\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}"
 export _ROS_WHEELS_BOOTSTRAP_COMPLETE=1
 export RMW_IMPLEMENTATION=rmw_fastrtps_cpp
-export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+# DDS of every process: loopback only (shared memory + UDP on 127.0.0.1), and writers that wait for
+# a slow reader instead of failing (config/dds/fastdds.xml says why). SYSTEM_DEFAULT: rmw_fastrtps
+# takes discovery and transports from that profile (LOCALHOST adds a UDP transport of its own
+# bound to every interface)
+export FASTRTPS_DEFAULT_PROFILES_FILE="$ROOT/config/dds/fastdds.xml"
+export ROS_AUTOMATIC_DISCOVERY_RANGE=SYSTEM_DEFAULT
 # ROS_DOMAIN_ID: run_graph.sh and replay.sh use an exported one, else claim a free one and print
 # it (--domain-id wins; alignment_ros/domain.py); the tests always claim their own.
 export AMENT_PREFIX_PATH="$VENV\${AMENT_PREFIX_PATH:+:\$AMENT_PREFIX_PATH}"

@@ -16,6 +16,10 @@ for _var in ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS'):
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config/params/graph.yaml'
+# the DDS profile scripts/env.sh exports (loopback only; writers wait for slow readers), also for the
+# test process's own participants when pytest runs without env.sh
+os.environ.setdefault('FASTRTPS_DEFAULT_PROFILES_FILE', str(ROOT / 'config/dds/fastdds.xml'))
+os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'SYSTEM_DEFAULT')
 # every test runs on a domain of its own (claimed, or given to its processes explicitly): a
 # ROS_DOMAIN_ID exported in the shell, which run_graph.sh and replay.sh honour, must not
 # put the suite's runs on one shared domain

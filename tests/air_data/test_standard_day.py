@@ -38,3 +38,18 @@ def test_pressure_altitude_inverts_and_matches_the_geopotential_table():
     np.testing.assert_allclose(t_at, ref.temperature, atol=1e-9)
     # the tropopause: geopotential 11 km is 22 632.06 Pa (the table's layer-base pressure)
     assert float(standard_day.pressure_altitude(22632.06)[0]) == pytest.approx(11000.0, abs=0.05)
+
+
+def test_day_pressure_obeys_the_hydrostatic_equation_of_its_temperature():
+    """d ln p / dH = -g0 / (R (T_std(H) + dT)) (central differences in geopotential height), p(0) = p0,
+    and dT = 0 is the standard day of ambiance."""
+    from alignment_core.air_data.atmosphere import G0, P0, R_AIR, geometric_height
+    H = np.array([500.0, 5000.0, 10000.0, 15000.0, 25000.0, 40000.0])
+    dH = 1.0
+    for dt in (-15.0, 0.0, 8.0):
+        up, down = (standard_day.day_pressure(geometric_height(H + s), [dt])[0] for s in (dH, -dH))
+        t_std, _ = standard_day.temperature_pressure(geometric_height(H))
+        np.testing.assert_allclose((np.log(up) - np.log(down)) / (2 * dH), -G0 / (R_AIR * (t_std + dt)), rtol=1e-7)
+        assert float(standard_day.day_pressure(0.0, [dt])[0, 0]) == pytest.approx(P0, rel=1e-15)
+    np.testing.assert_allclose(standard_day.day_pressure(HEIGHTS, [0.0])[0], ambiance.Atmosphere(HEIGHTS).pressure,
+                               rtol=5e-6)

@@ -58,3 +58,26 @@ def test_without_the_gate_the_corrupted_samples_pull_the_estimate():
     clean, bad, d = _offsets(0.0)
     assert bad.counters.gated == 0 and bad.counters.updates == clean.counters.updates
     assert np.max(d) > 10.0 and np.max(d[-1]) > 10.0
+
+
+def test_the_default_gate_is_on_and_never_gates_a_clean_run():
+    """filter.gate_chi2 = 1e6 by default: a gross-outlier gate (a velocity innovation 1000 sigma
+    off); the clean deck run's largest NIS is ~20 (chi2_3 over 1000 updates)."""
+    sc = scenario.load('deck', DECK)
+    assert sc.filter.gate_chi2 == 1e6
+    f = pipeline.align(sc, pipeline.simulate(sc))
+    assert f.counters.gated == 0 and f.counters.gate_released == 0
+
+
+def test_a_gated_run_is_released_after_gate_release_updates():
+    """A master velocity 0.5 m/s off for 30 samples (NIS ~1e4 each) with the gate at 25: the
+    first 10 are gated, the 11th is taken ungated (the filter would otherwise lock itself out if
+    its state, not the data, were wrong), then the gate closes again on the next ones."""
+    sc = scenario.load('deck', {**DECK, 'filter.gate_chi2': 25.0})
+    inp = pipeline.simulate(sc)
+    master = list(inp.master)
+    for k in range(500, 530):
+        master[k] = dataclasses.replace(master[k], v_b=master[k].v_b + np.array([0.5, 0.0, 0.0]))
+    f = pipeline.align(sc, dataclasses.replace(inp, master=master))
+    assert f.counters.gate_released >= 1
+    assert f.counters.gated + f.counters.updates == pipeline.align(sc, inp).counters.updates

@@ -9,6 +9,7 @@ import pytest
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
+from alignment_core.estimation.health import ERROR
 
 SHORT = {'duration_s': 6.0, 'aircraft.catapult.launch_time_s': 3.0}
 F32_SEED003 = {**SHORT, 'filter.model': 'seed003_21', 'filter.float32': True}
@@ -43,11 +44,12 @@ def test_square_root_filters_stay_healthy_in_single_precision(algorithm):
 
 @pytest.mark.parametrize('algorithm', ['kf', 'carlson'])
 def test_a_corrupted_master_sample_breaks_the_filter_down_and_the_last_estimate_is_held(algorithm):
-    """Float64: a master message whose velocity is corrupted to ~1e200 m/s is finite, so it passes
-    the input check, but its innovation squared overflows (a non-finite NIS) at its update. The
+    """Float64, with the master speed range opened up (filter.master_speed_max_mps; by default a
+    1e200 m/s sample is rejected at the push, see the next test): the innovation squared of a
+    master velocity corrupted to ~1e200 m/s overflows (a non-finite NIS) at its update. The
     outputs before it are the clean run's, the ones after hold the last good estimate (the output
     at the master sample before it), and the engine keeps publishing to the end."""
-    sc = scenario.load('catapult', {**SHORT, 'filter.algorithm': algorithm})
+    sc = scenario.load('catapult', {**SHORT, 'filter.algorithm': algorithm, 'filter.master_speed_max_mps': 1e300})
     inp = pipeline.simulate(sc)
     ref = pipeline.align(sc, inp)
     k = 201                                   # the master sample after the output at 2.0 s
@@ -64,4 +66,22 @@ def test_a_corrupted_master_sample_breaks_the_filter_down_and_the_last_estimate_
         assert np.array_equal(a.misalignment, b.misalignment) and np.array_equal(a.sigma, b.sigma)
     for e in out[21:]:
         assert np.array_equal(e.misalignment, good[-1].misalignment) and np.array_equal(e.sigma, good[-1].sigma)
-        assert not e.matching
+        assert not e.matching and e.level == ERROR and 'breakdown' in e.flags
+    # what a node publishes: the same (the engine holds the estimate itself), flagged, never NaN
+    for e, o in zip(f.published[21:], out[21:]):
+        assert np.array_equal(e.misalignment, o.misalignment) and 'held' in e.flags
+        assert np.all(np.isfinite(e.q_nb)) and np.all(np.isfinite(e.p_w)) and np.all(np.isfinite(e.pose_cov))
+
+
+def test_by_default_an_absurd_master_velocity_is_rejected_at_the_push():
+    """The same 1e200 m/s master sample is beyond filter.master_speed_max_mps (100 m/s): rejected
+    and counted as 'range', it never reaches the filter, which stays healthy and misses one update."""
+    sc = scenario.load('catapult', SHORT)
+    inp = pipeline.simulate(sc)
+    ref = pipeline.align(sc, inp)
+    master = list(inp.master)
+    master[201] = dataclasses.replace(master[201], v_b=master[201].v_b * 1e200)
+    f = pipeline.align(sc, dataclasses.replace(inp, master=master))
+    assert f.counters.rejected_range == 1 and f.counters.numerical_failures == 0 and f.healthy
+    assert f.counters.updates == ref.counters.updates - 1
+    assert all(e.level < ERROR for e in f.outputs)

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
@@ -123,3 +124,56 @@ def test_creep_is_motion_and_a_stroke_above_it_is_the_launch():
     assert d.t_launch_ns is None
     launch = [d.observe(_ldv(t, 0.2)).launch_ns for t in (130, 140, 150)]
     assert launch == [None, None, 130_000_000] and d.t_moving_ns == 90_000_000
+
+
+def test_an_ldv_run_the_accelerometers_do_not_feel_is_not_a_launch():
+    """Five LDV samples of 10 m/s on the parked deck: reaching 10 m/s takes a velocity change of
+    10 m/s along the aircraft's x axis, which the accelerometers would integrate; they felt
+    nothing (the deck's motion, < 0.1 m/s), so the run is released as parked and counted, and
+    the matches go on as in the clean run."""
+    sc = scenario.load('deck', {'duration_s': 6.0})
+    t0 = sc.t0_ns + 3_000_000_000
+    fake = {t0 + k * 10_000_000 for k in range(5)}
+
+    def run10(s):
+        return replace(s, v_s=np.array([10.0, 0.0, 0.0])) if s.t_ns in fake else s
+    f, _ = _run(sc, run10)
+    clean, _ = _run(sc, lambda s: s)
+    assert not f.deck_motion.moving and f.deck_motion.t_launch_ns is None
+    assert f.counters.launch_not_felt == 1 and f.counters.updates == clean.counters.updates
+    np.testing.assert_allclose(f.outputs[-1].misalignment, clean.outputs[-1].misalignment, rtol=0, atol=1e-5)
+    # without the IMU check (launch_felt_fraction 0) the LDV alone takes it for the launch
+    old = replace(sc, filter=replace(sc.filter, launch_felt_fraction=0.0))
+    f0, _ = _run(old, run10)
+    assert f0.deck_motion.t_launch_ns == t0 and f0.counters.launch_not_felt == 0
+
+
+def test_the_catapult_is_felt_and_dated_as_without_the_check():
+    """The 2 g stroke: by the third LDV sample (0.59 m/s) the accelerometers integrated ~0.6 m/s,
+    well above the 0.5 * 0.59 - 0.2 m/s required: the same launch, at the same time."""
+    sc = scenario.load('catapult', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 2.0})
+    f, _ = _run(sc, lambda s: s)
+    off = replace(sc, filter=replace(sc.filter, launch_felt_fraction=0.0))
+    f0, _ = _run(off, lambda s: s)
+    assert f.deck_motion.t_launch_ns == f0.deck_motion.t_launch_ns is not None
+    assert f.counters.launch_not_felt == 0
+    assert np.array_equal(f.outputs[-1].misalignment, f0.outputs[-1].misalignment)
+
+
+def test_the_felt_check_integrates_specific_force_against_the_parked_baseline():
+    """The detector alone: parked at a 0.5 m/s^2 offset (gravity on a pitched deck), then 2 g along
+    x from 2.0 s, the IMU fed to 2.29 s. The run starts at the first fast LDV sample (2.01 s); the
+    velocity change is summed over the intervals after 1.91 s less the baseline (the offset, which
+    cancels exactly): 2 g * 0.29 s, against the 0.5 * 0.588 - 0.2 m/s the run's speed requires."""
+    lim = LaunchThresholds(0.05, 3, 0.0, 25, 0, 0.5, 0.2)
+    d = LaunchDetector(lim)
+    ms = 1_000_000
+    t_launch = 2000 * ms
+    for k in range(1, 230):
+        t = k * 10 * ms
+        d.observe_imu(t, 0.5 + (19.6133 if t > t_launch else 0.0), 0.01)
+    for k, v in enumerate((0.196, 0.392, 0.588)):
+        dec = d.observe(LdvSample(t_launch + (k + 1) * 10 * ms, np.array([v, 0.0, 0.0]), 0.01, True))
+    assert dec.launch_ns == t_launch + 10 * ms
+    dv = 19.6133 * 0.29                                    # 2 g over the intervals ending (1.91 s, 2.29 s]
+    assert d.felt_margin_mps == pytest.approx(dv - (0.5 * 0.588 - 0.2), rel=1e-9)

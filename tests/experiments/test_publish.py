@@ -21,7 +21,7 @@ intro
 def test_a_perturbed_digest_is_stale(tmp_path):
     runs = tmp_path / 'runs.csv'
     runs.write_text('run,cell\n0,a\n')
-    good = publish.digest(runs)
+    good = publish.digest(runs, 'sha256')
     md = tmp_path / 'results.md'
     md.write_text(f'text\n<!-- quick-digest exp sha256={good} -->\n')
     publish.check_fresh('exp', runs, md)                     # the published numbers: fresh
@@ -58,3 +58,18 @@ def test_published_sections_are_kept_verbatim_by_name():
     assert list(s) == ['one', 'two']
     assert s['one'].startswith('## First') and '### sub' in s['one'] and 'quick-digest one' in s['one']
     assert s['two'] == '## Second\n\n<a id="two"></a>\nbody 2\n'
+
+
+def test_the_rounded_digest_ignores_the_last_bits_not_the_sixth_digit(tmp_path):
+    """The same code on another CPU moves a float's last bits: the published digest (numbers
+    rounded to 6 significant digits) stays; a change in the 6th digit, or of an integer, is stale."""
+    runs = tmp_path / 'runs.csv'
+    runs.write_text('run,cell,err,updates\n0,"kf, capped",0.12345678901234567,300\n')
+    md = tmp_path / 'results.md'
+    md.write_text(f'<!-- quick-digest exp sha256r6={publish.digest(runs)} -->\n')
+    runs.write_text('run,cell,err,updates\n0,"kf, capped",0.12345678901234598,300\n')
+    publish.check_fresh('exp', runs, md)
+    for moved in ('0.12345778901234567,300', '0.12345678901234567,301'):
+        runs.write_text(f'run,cell,err,updates\n0,"kf, capped",{moved}\n')
+        with pytest.raises(publish.StaleResultsError):
+            publish.check_fresh('exp', runs, md)

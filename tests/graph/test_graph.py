@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -176,3 +177,42 @@ def test_invalid_scenario_value_fails_with_named_key(tmp_path):
                         '--set', 'ship.sea_state=12'], capture_output=True, text=True, timeout=120)
     assert p.returncode == 2
     assert 'sea_state' in p.stderr
+
+
+@pytest.mark.parametrize('module, args', [
+    ('graph', ['--real-time-factor', '-1']),
+    ('graph', ['--real-time-factor', 'nan']),
+    ('graph', ['--timeout', '0']),
+    ('graph', ['--seed', '-3']),
+    ('graph', ['--domain-id', '300']),
+    ('replay', ['some/bag', '--domain-id', '-1']),
+])
+def test_impossible_option_values_are_refused_in_one_line(tmp_path, module, args):
+    p = subprocess.run([sys.executable, '-m', f'alignment_ros.{module}', '--out', str(tmp_path / 'x'),
+                        *args], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2
+    assert len(p.stderr.splitlines()) == 1 and f'argument {args[-2]}' in p.stderr, p.stderr
+    assert not (tmp_path / 'x').exists()
+
+
+def test_replay_of_a_cut_bag_repairs_it_and_fails(graph_run, tmp_path):
+    """A run's bag file cut at 50 % (metadata.yaml gone too): replay.sh repairs it first (one
+    line), replays what it holds, records every output the filter published and exits 1."""
+    import shutil
+
+    from mcap.reader import make_reader
+    run = tmp_path / 'run'
+    shutil.copytree(graph_run, run, ignore=shutil.ignore_patterns('echo.txt'))
+    f = run / 'bag' / 'bag_0.mcap'
+    os.truncate(f, f.stat().st_size // 2)
+    (run / 'bag' / 'metadata.yaml').unlink()
+    p = subprocess.run([str(ROOT / 'scripts/replay.sh'), str(run), '--out', str(tmp_path / 'replay')],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 1, p.stdout + p.stderr
+    assert [x for x in p.stderr.splitlines() if 'repaired' in x] == [p.stderr.splitlines()[0]]
+    assert 'truncated' not in p.stderr and 'Traceback' not in p.stderr
+    with f.open('rb') as fh:
+        assert make_reader(fh).get_summary() is not None
+    s = json.loads((tmp_path / 'replay' / 'summary.json').read_text())
+    assert s['complete'] is False and s['lost_total'] == 0
+    assert s['topics']['/alignment/misalignment'] == s['published']['/alignment/misalignment'] > 0

@@ -7,7 +7,8 @@ import pytest
 from rcl_interfaces.srv import GetParameters
 from support.ros_driving import spin_until
 
-NODES = ('ship_motion_node', 'master_ins_node', 'slave_ins_node', 'ldv_node', 'alignment_filter_node')
+NODES = ('ship_motion_node', 'master_ins_node', 'slave_ins_node', 'ldv_node', 'alignment_filter_node',
+         'air_data_node', 'air_data_filter_node')
 
 
 def _refusal(p) -> list[str]:

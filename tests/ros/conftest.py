@@ -12,7 +12,7 @@ def domain_id(monkeypatch: pytest.MonkeyPatch) -> int:
     from alignment_ros import domain
     dom = domain.claim()
     monkeypatch.setenv('ROS_DOMAIN_ID', str(dom))
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'SYSTEM_DEFAULT')   # the loopback profile decides
     yield dom
     domain.release(dom)
 

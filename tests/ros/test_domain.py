@@ -85,3 +85,21 @@ def test_a_domain_rcl_would_refuse_is_an_error(monkeypatch, value):
     monkeypatch.setenv('ROS_DOMAIN_ID', value)
     with pytest.raises(RuntimeError, match='is not a domain id'):
         domain.for_run(None)
+
+
+def test_the_processes_of_a_run_keep_its_domain_claimed(free_domain):
+    """A launcher hands the lock's descriptor to what it starts (Popen pass_fds): the domain
+    stays claimed while any of them lives, even after the launcher let go, and is free once
+    the last is gone."""
+    import subprocess
+    dom = domain.claim(free_domain)
+    child = subprocess.Popen(['sleep', '60'], pass_fds=(domain.lock_fd(dom),))
+    try:
+        domain.release(dom)
+        assert _locked(dom)
+        child.kill()
+        child.wait()
+        assert not _locked(dom)
+    finally:
+        if child.poll() is None:
+            child.kill()

@@ -23,7 +23,8 @@ ROOT = Path(__file__).resolve().parents[2]
 GRAPH_YAML = ROOT / 'config/params/graph.yaml'
 NODES = {'ship_motion_node': 'ShipMotionNode', 'master_ins_node': 'MasterInsNode',
          'slave_ins_node': 'SlaveInsNode', 'ldv_node': 'LdvNode',
-         'alignment_filter_node': 'AlignmentFilterNode'}
+         'alignment_filter_node': 'AlignmentFilterNode', 'air_data_node': 'AirDataNode',
+         'air_data_filter_node': 'AirDataFilterNode'}
 ARM = [60.0, -15.0, 20.0]
 
 
@@ -77,7 +78,8 @@ def test_filter_node_declares_filter_and_what_a_user_knows(make_node):
 @pytest.mark.parametrize('name,sections', [
     ('ship_motion_node', {'ship', 'name', 'seed', 'duration_s', 'rate_hz', 'start_time_s'}),
     ('master_ins_node', {'master', 'seed', 'rate_hz', 'start_time_s'}),
-    ('slave_ins_node', {'aircraft', 'imu', 'seed', 'rate_hz', 'start_time_s'}),
+    ('slave_ins_node', {'aircraft', 'imu', 'reference_ins', 'seed', 'rate_hz', 'start_time_s'}),
+    ('air_data_node', {'fads', 'seed', 'rate_hz', 'start_time_s'}),
     ('ldv_node', {'ldv', 'doppler', 'seed', 'rate_hz', 'start_time_s'}),
 ])
 def test_simulation_nodes_declare_their_sections(make_node, name, sections):

@@ -56,7 +56,7 @@ def wait_count(pub, n: int, timeout: float = 30.0) -> None:
 def recorded(tmp_path_factory) -> dict[str, Path]:
     from alignment_ros import domain
     dom = domain.claim()
-    env = dict(os.environ, ROS_DOMAIN_ID=str(dom), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    env = dict(os.environ, ROS_DOMAIN_ID=str(dom), ROS_AUTOMATIC_DISCOVERY_RANGE='SYSTEM_DEFAULT')
     out = tmp_path_factory.mktemp('record')
     ctx = Context()
     rclpy.init(context=ctx, domain_id=dom)

@@ -179,7 +179,8 @@ def test_lag_step_response_with_the_altitude_time_constant(height, dt_s, span_s)
     np.testing.assert_allclose(pressures(frames), want, rtol=0, atol=1e-9 * np.max(u1 - u0))
     # about 63 % of the step after one tau
     i = int(round(tau[0] / dt_s))
-    assert (pressures(frames)[i, 0] - u0[0]) / (u1[0] - u0[0]) == pytest.approx(1 - np.exp(-i * dt_s / tau[0]), abs=1e-4)
+    share = (pressures(frames)[i, 0] - u0[0]) / (u1[0] - u0[0])
+    assert share == pytest.approx(1 - np.exp(-i * dt_s / tau[0]), abs=1e-4)
 
 
 def accelerating(n: int = 501):

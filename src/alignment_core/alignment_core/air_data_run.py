@@ -64,18 +64,38 @@ def _reference_ins(sc: Scenario, t_ns, q_nb, v_enu, lat, lon, h) -> list[InsSamp
     return out
 
 
+def _aligned_ins(sc: Scenario, inp: pipeline.Inputs) -> list[InsSample]:
+    """The transfer-aligned slave INS as the alignment filter publishes it (/alignment/odom):
+    its corrected solution at every output, with its covariance."""
+    plane = pipeline.plane_of(sc)
+    out = []
+    for e in pipeline.align(sc, inp).outputs:
+        if e.p_w is None or e.v_b is None or e.pose_cov is None or e.twist_cov is None or not e.healthy:
+            continue
+        c = quat_to_dcm_batch(np.asarray(e.q_nb, dtype=float))
+        lat, _, h = plane.to_geodetic(np.asarray(e.p_w, dtype=float))
+        out.append(InsSample((e.t_ns - sc.t0_ns) * 1e-9, np.asarray(e.q_nb, dtype=float), c @ e.v_b, float(h),
+                             float(lat), e.pose_cov[3:6, 3:6], c @ e.twist_cov[:3, :3] @ c.T, float(e.pose_cov[2, 2])))
+    return out
+
+
 def simulate(sc: Scenario) -> AirDataInputs:
-    """Truth, IMU, FADS frames and the INS solutions for the whole run."""
+    """Truth, IMU, FADS frames and the INS solutions (sc.air_data_filter.ins_source) for the whole run."""
     if not sc.fads.enabled:
         raise ValueError("the scenario has no FADS (fads.enabled false)")
-    if not sc.reference_ins.enabled:
-        raise ValueError("air_data_run needs reference_ins.enabled (the aligned-INS source runs in the graph)")
-    ships = ShipBatch.of(pipeline.ship_samples(sc))
-    truth, imu = pipeline.SlaveImuStage(sc).run_batch(ships)
+    aligned = sc.air_data_filter.ins_source == 'aligned'
+    if not aligned and not sc.reference_ins.enabled:
+        raise ValueError("air_data_filter.ins_source 'reference' needs reference_ins.enabled")
+    if aligned:
+        inp = pipeline.simulate(sc)
+        ships, truth, imu = inp.ships, inp.truth, inp.imu
+    else:
+        ships = ShipBatch.of(pipeline.ship_samples(sc))
+        truth, imu = pipeline.SlaveImuStage(sc).run_batch(ships)
     lat, lon, h = pipeline.plane_of(sc).to_geodetic(truth['p_w'])
     v_enu = np.einsum('kij,kj->ki', quat_to_dcm_batch(truth['q_nb']), truth['v_b'])
     frames = FadsStage(sc.fads, sc.seed, sc.t0_ns).step_batch(ships.t_ns, truth['q_nb'], v_enu, h)
-    ins = _reference_ins(sc, ships.t_ns, truth['q_nb'], v_enu, lat, lon, h)
+    ins = _aligned_ins(sc, inp) if aligned else _reference_ins(sc, ships.t_ns, truth['q_nb'], v_enu, lat, lon, h)
     return AirDataInputs(ships.t_ns, truth['q_nb'], v_enu, lat, lon, h, imu, frames, ins)
 
 

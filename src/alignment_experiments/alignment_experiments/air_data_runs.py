@@ -55,6 +55,22 @@ def score(exp: AirDataExperiment, run: air_data_run.AirDataRun, cr_sigma: np.nda
         for t in check_times(exp, duration_s):
             j = int(np.argmin(np.abs(run.t - t)))
             out[f'z2_{q}_{t:g}'] = float(z2[j])
+    if exp.wind_after_s is not None:
+        late = run.t >= exp.wind_after_s
+        if not np.any(late):                               # a quick run that ends before: its last 60 s
+            late = run.t >= run.t[-1] - 60.0
+        nees = np.zeros(int(np.sum(late)))
+        for axis in ('east', 'north', 'up'):
+            i = labels.index(f'wind_{axis}_mps')
+            e = run.value[late, i] - run.truth[late, i]
+            out[f'wind_{axis}_rms'] = float(np.sqrt(np.mean(e**2)))
+            out[f'wind_{axis}_sigma'] = float(np.sqrt(np.mean(run.sigma[late, i] ** 2)))
+            nees += (e / run.sigma[late, i]) ** 2
+        out['wind_nees'] = float(np.mean(nees))
+    if exp.fault_at_s is not None:
+        after = [t for t, _ in run.detections if t >= exp.fault_at_s - 1e-9]
+        out['detect_after_fault_s'] = float(after[0] - exp.fault_at_s) if after else float('nan')
+        out['false_exclusions'] = sum(1 for t, _ in run.detections if t < exp.fault_at_s - 1e-9)
     out['updates'] = int(run.counts.get('updates', 0))
     out['gated'] = int(run.counts.get('gated', 0))
     out['excluded'] = ' '.join(str(p) for p in run.excluded_ports)
@@ -63,13 +79,18 @@ def score(exp: AirDataExperiment, run: air_data_run.AirDataRun, cr_sigma: np.nda
 
 
 def run_seed(exp: AirDataExperiment, seed: int) -> list[dict]:
-    """Simulate one seed and estimate it with every cell."""
-    sc = scenario.load(exp.scenario, dict(exp.base), seed=seed)
-    inp = air_data_run.simulate(sc)
+    """Simulate one seed (once per distinct simulation: cells that only change the estimator share
+    it) and estimate it with every cell."""
+    sims: dict[tuple, air_data_run.AirDataInputs] = {}
     rows = []
     for cell in exp.cells:
         wall = time.perf_counter()
         csc = scenario.load(exp.scenario, dict(exp.base + cell.overrides), seed=seed)
+        key = tuple((k, v) for k, v in cell.overrides if not k.startswith('air_data_filter.'))
+        if key not in sims:
+            sims[key] = air_data_run.simulate(csc)
+        inp = sims[key]
+        sc = csc
         run = air_data_run.estimate(csc, inp, form=cell.form, algorithm=cell.algorithm)
         labels = list(run.labels)
         a, b, m, p = (run.truth[:, labels.index(n)] for n in ('alpha_rad', 'beta_rad', 'mach', 'static_pressure_pa'))
@@ -130,6 +151,30 @@ def summarise(exp: AirDataExperiment, rows: list[dict]) -> list[dict]:
     return out
 
 
+def wind_and_fault_table(exp: AirDataExperiment, rows: list[dict]) -> str:
+    """Per cell: wind RMS with its mean 1-sigma and the mean 3-dof NEES (95 % bounds), the
+    detection delay of a failed port and false exclusions."""
+    head = ['cell', 'wind RMS E/N/U m/s', 'mean 1σ E/N/U m/s', 'wind NEES (95 % bounds)',
+            'detected after (s): median, max', 'runs detected', 'false exclusions']
+    lines = ['| ' + ' | '.join(head) + ' |', '|' + '---|' * len(head)]
+    for cell in exp.cells:
+        rs = [r for r in rows if r['cell'] == cell.label]
+        rms = [float(np.sqrt(np.mean([r[f'wind_{a}_rms'] ** 2 for r in rs]))) for a in ('east', 'north', 'up')]
+        sig = [float(np.sqrt(np.mean([r[f'wind_{a}_sigma'] ** 2 for r in rs]))) for a in ('east', 'north', 'up')]
+        lo, hi = nees_bounds(3, len(rs))
+        nees = float(np.mean([r['wind_nees'] for r in rs]))
+        det = np.array([r.get('detect_after_fault_s', np.nan) for r in rs], dtype=float)
+        faulty = any(k == 'fads.faults' for k, _ in cell.overrides)
+        found = det[np.isfinite(det)]
+        lines.append('| ' + ' | '.join([
+            cell.label, '/'.join(f'{x:.3f}' for x in rms), '/'.join(f'{x:.3f}' for x in sig),
+            f'{nees:.2f} [{lo:.2f}, {hi:.2f}]',
+            (f'{np.median(found):.2f}, {np.max(found):.2f}' if len(found) else '-') if faulty else '-',
+            f'{len(found)} of {len(rs)}' if faulty else '-',
+            str(sum(int(r.get('false_exclusions', 0)) for r in rs))]) + ' |')
+    return '\n'.join(lines)
+
+
 def _f(v: float, q: str, digits: int = 3) -> str:
     return f'{v * SHOWN[q][1]:.{digits}g}'
 
@@ -149,6 +194,8 @@ def report(out: Path, exp: AirDataExperiment, rows: list[dict], seeds: int) -> P
         lines.append('| ' + ' | '.join(cols) + ' |')
     md = [f'# {exp.title}', '', exp.description, '', f'{seeds} seeds per cell.', '', '## Results per cell', '',
           *lines, '']
+    if exp.wind_after_s is not None:
+        md += ['## Wind and port faults', '', wind_and_fault_table(exp, rows), '']
     if exp.claims:
         md += ['## Beside the paper', '', _beside(exp, by), '']
     path = out / 'report.md'

@@ -1,9 +1,13 @@
 """alignment_filter_node: aligns the aircraft INS to the master INS (never reads truth).
 
-Inputs are queued and processed in stamp order by alignment_core's TransferAlignment, so
-its outputs do not depend on how the three streams interleave on arrival. A numerical
-breakdown of the filter does not stop the node: it keeps publishing the last good estimate
-and reports the failure in /diagnostics (level ERROR, `healthy: false`, `numerical_failures`).
+Inputs are checked for their frame (a message in another frame is rejected and counted as
+'frame_id'), converted, and queued and processed in stamp order by alignment_core's
+TransferAlignment, which rejects implausible samples itself (counted per reason), so its outputs
+do not depend on how the streams interleave on arrival. What it publishes is the engine's
+published view: never a non-finite or absurd estimate, and from an ERROR on (a numerical
+breakdown, an inconsistent filter, a long IMU gap) the last good estimate on every topic, reported
+in /diagnostics (level ERROR, `healthy: false`). /diagnostics is published every 10th output and
+whenever the level or its reasons change (a master or LDV that falls silent: WARN).
 """
 from __future__ import annotations
 
@@ -18,8 +22,56 @@ from std_msgs.msg import Float64MultiArray
 
 from alignment_core import pipeline
 from alignment_core.estimation.engine import TransferAlignment
+from alignment_core.estimation.health import ERROR, WARN
+from alignment_core.estimation.outputs import Diagnostics, Estimate
 from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
+
+LEVELS = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR)
+
+
+class FilterInputs:
+    """Messages into the engine: the frame check, the conversion, the push. Each call returns ''
+    if the message was taken, else the reason it was rejected ('frame_id' or the engine's)."""
+
+    def __init__(self, engine: TransferAlignment) -> None:
+        self.engine = engine
+        self.rejected_frame_id = 0
+
+    def imu(self, m: Imu) -> str:
+        return self._take(topics.AIRCRAFT_IMU, m) or self._pushed(self.engine.push_imu(convert.msg_to_imu(m)))
+
+    def master(self, m: Odometry) -> str:
+        return self._take(topics.MASTER_ODOM, m) or self._pushed(self.engine.push_master(convert.msg_to_master(m)))
+
+    def ldv(self, m: TwistWithCovarianceStamped) -> str:
+        return self._take(topics.LDV_TWIST, m) or self._pushed(self.engine.push_ldv(convert.msg_to_ldv(m)))
+
+    def doppler(self, m: TwistWithCovarianceStamped) -> str:
+        return self._take(topics.DOPPLER_TWIST, m) or self._pushed(
+            self.engine.push_doppler(convert.msg_to_doppler(m)))
+
+    def _take(self, topic: str, m) -> str:
+        if convert.frame_mismatch(m, *topics.INPUT_FRAMES[topic]):
+            self.rejected_frame_id += 1
+            return 'frame_id'
+        return ''
+
+    def _pushed(self, ok: bool) -> str:
+        return '' if ok else self.engine.last_rejection or 'rejected'
+
+    def status(self) -> tuple[int, tuple[str, ...]]:
+        """The engine's (level, flags), WARN and 'frame_id' once a message in a wrong frame came."""
+        level, flags = self.engine.status()
+        if self.rejected_frame_id:
+            return max(level, WARN), (*flags, 'frame_id')
+        return level, flags
+
+    def message(self, d: Diagnostics) -> str:
+        """The engine's diagnostics message, with the wrong-frame rejections."""
+        if not self.rejected_frame_id:
+            return d.message
+        return f'{d.message}; {self.rejected_frame_id} messages in a wrong frame rejected'
 
 
 class AlignmentFilterNode(node_util.CountingNode):
@@ -28,9 +80,11 @@ class AlignmentFilterNode(node_util.CountingNode):
         self.sc = ScenarioParameters(self, NODE_SCOPES['alignment_filter_node']).scenario
         self.plane = pipeline.plane_of(self.sc)
         self.engine = TransferAlignment(self.sc.filter, self.plane, self.sc.rate_hz)
+        self.inputs = FilterInputs(self.engine)
         self.stream_publisher(Vector3Stamped, topics.ALIGN_MISALIGNMENT)
         self.stream_publisher(PoseWithCovarianceStamped, topics.ALIGN_ATTITUDE)
         self.stream_publisher(Float64MultiArray, topics.ALIGN_STATE)
+        self.stream_publisher(Odometry, topics.ALIGN_ODOM)
         self.stream_publisher(DiagnosticArray, topics.DIAGNOSTICS)
         self.create_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu, qos.STREAM)
         self.create_subscription(Odometry, topics.MASTER_ODOM, self.on_master, qos.STREAM)
@@ -38,78 +92,95 @@ class AlignmentFilterNode(node_util.CountingNode):
         if self.engine.uses_doppler:
             self.create_subscription(TwistWithCovarianceStamped, topics.DOPPLER_TWIST, self.on_doppler, qos.STREAM)
         self.n_out = 0
-        self.reported_failure = False
+        self.reported: tuple[int, tuple[str, ...]] = (0, ())    # (level, flags) last published in /diagnostics
+        self.last: Estimate | None = None
 
     def on_imu(self, m: Imu) -> None:
-        self._accept(topics.AIRCRAFT_IMU, self.engine.push_imu(convert.msg_to_imu(m)), m)
+        self._accept(topics.AIRCRAFT_IMU, self.inputs.imu(m), m)
 
     def on_master(self, m: Odometry) -> None:
-        self._accept(topics.MASTER_ODOM, self.engine.push_master(convert.msg_to_master(m)), m)
+        self._accept(topics.MASTER_ODOM, self.inputs.master(m), m)
 
     def on_ldv(self, m: TwistWithCovarianceStamped) -> None:
-        self._accept(topics.LDV_TWIST, self.engine.push_ldv(convert.msg_to_ldv(m)), m)
+        self._accept(topics.LDV_TWIST, self.inputs.ldv(m), m)
 
     def on_doppler(self, m: TwistWithCovarianceStamped) -> None:
-        self._accept(topics.DOPPLER_TWIST, self.engine.push_doppler(convert.msg_to_doppler(m)), m)
+        self._accept(topics.DOPPLER_TWIST, self.inputs.doppler(m), m)
 
-    def _accept(self, topic: str, ok: bool, m) -> None:
+    def _accept(self, topic: str, why: str, m) -> None:
         self.received[topic] += 1
-        if not ok:
+        if why:
             self.rejected[topic] += 1
             self.get_logger().warning(
-                f'rejected {topic} message stamped {convert.to_ns(m.header.stamp)} ns '
-                f'(non-finite or not after the previous stamp); {self.rejected[topic]} so far',
-                throttle_duration_sec=1.0)
-        self._publish(self.engine.process())
+                f'rejected {topic} message stamped {convert.to_ns(m.header.stamp)} ns ({why}); '
+                f'{self.rejected[topic]} rejected on it so far', throttle_duration_sec=1.0)
+        self._publish(self.engine.process(), convert.to_ns(m.header.stamp))
 
-    def _publish(self, estimates) -> None:
-        if not estimates:
-            return
-        nav = self.engine.solution          # the live slave solution: position of the published pose
-        assert nav is not None              # estimates exist only after initialisation
-        p_w = self.plane.from_geodetic(nav.lat, nav.lon, nav.h)
+    def _publish(self, estimates: list[Estimate], t_ns: int) -> None:
         for e in estimates:
+            p_w = e.p_w if e.p_w is not None else self._position()
             mis, att, st = convert.estimate_to_msgs(e, self.engine.labels, p_w)
             self.send(topics.ALIGN_MISALIGNMENT, mis)
             self.send(topics.ALIGN_ATTITUDE, att)
             self.send(topics.ALIGN_STATE, st)
-            if self.n_out % 10 == 0 or (not e.healthy and not self.reported_failure):
-                self.send(topics.DIAGNOSTICS, self._diagnostics(e))
-            if not e.healthy and not self.reported_failure:
-                self.reported_failure = True
-                self.get_logger().error(f'numerical breakdown ({self.engine.failure}): the filter stopped; '
-                                        f'publishing the last good estimate')
+            odom = convert.estimate_to_odometry(e)
+            if odom is not None:
+                self.send(topics.ALIGN_ODOM, odom)
+            self.last = e
+            if self.n_out % 10 == 0 or self._changed():
+                self._send_diagnostics(e.t_ns)
             self.n_out += 1
+        if not estimates and self._changed():     # e.g. a stream fell silent, a message in a wrong frame
+            self._send_diagnostics(t_ns if self.last is None else max(t_ns, self.last.t_ns))
 
-    def _diagnostics(self, e) -> DiagnosticArray:
-        c = self.engine.counters
+    def _position(self) -> np.ndarray:
+        nav = self.engine.solution
+        return np.zeros(3) if nav is None else self.plane.from_geodetic(nav.lat, nav.lon, nav.h)
+
+    def _changed(self) -> bool:
+        return self.inputs.status() != self.reported
+
+    def _send_diagnostics(self, t_ns: int) -> None:
         d = self.engine.diagnostics()
-        bad = c.rejected_nonfinite + c.rejected_out_of_order + c.imu_gaps + c.unmatched_master
-        level = DiagnosticStatus.OK if bad == 0 else DiagnosticStatus.WARN
-        msg = 'aligning' if e.matching else 'free inertial (no matching)'
-        if not e.healthy:
-            level = DiagnosticStatus.ERROR
-            msg = f'numerical breakdown ({d.failure}): last good estimate held, filter stopped'
-        return convert.diagnostics(e.t_ns, 'alignment_filter', level, msg, {
-            'nis': f'{e.nis:.4g}', 'updates': c.updates, 'gated': c.gated,
-            'rejected_nonfinite': c.rejected_nonfinite,
-            'rejected_out_of_order': c.rejected_out_of_order, 'imu_gaps': c.imu_gaps,
+        level, flags = self.inputs.status()
+        text = self.inputs.message(d)
+        if level == ERROR and self.reported[0] < ERROR:
+            self.get_logger().error(text)
+        elif (level, flags) != self.reported and flags:
+            self.get_logger().warning(f'{text} [{", ".join(flags)}]', throttle_duration_sec=1.0)
+        self.reported = (level, flags)
+        self.send(topics.DIAGNOSTICS, self._diagnostics(t_ns, d, level, flags, text))
+
+    def _diagnostics(self, t_ns: int, d: Diagnostics, level: int, flags: tuple[str, ...], text: str
+                     ) -> DiagnosticArray:
+        c = self.engine.counters
+        e = self.last
+        return convert.diagnostics(t_ns, 'alignment_filter', LEVELS[level], text, {
+            'nis': f'{e.nis:.4g}' if e is not None else 'nan', 'updates': c.updates, 'gated': c.gated,
+            'rejected_nonfinite': c.rejected_nonfinite, 'rejected_out_of_order': c.rejected_out_of_order,
+            'rejected_quaternion': c.rejected_quaternion, 'rejected_range': c.rejected_range,
+            'rejected_future_stamp': c.rejected_future_stamp, 'rejected_frame_id': self.inputs.rejected_frame_id,
+            'quaternion_normalised': c.quaternion_normalised, 'launch_not_felt': c.launch_not_felt,
+            'imu_gaps': c.imu_gaps, 'bridged_gaps': c.bridged_gaps, 'gate_released': c.gate_released,
             'imu': c.imu, 'master': c.master, 'ldv': c.ldv, 'doppler': c.doppler,
             'doppler_updates': c.doppler_updates, 'unmatched_master': c.unmatched_master,
-            'numerical_failures': c.numerical_failures, 'healthy': str(e.healthy).lower(),
-            'pending': d.pending,
+            'numerical_failures': c.numerical_failures, 'healthy': str(d.healthy).lower(),
+            'flags': ' '.join(flags), 'silent': ' '.join(d.silent), 'held': str(
+                e is not None and 'held' in e.flags).lower(),
+            **{k: f'{v:.4g}' if isinstance(v, float) else v for k, v in d.consistency.items()},
+            'consistency_failures': c.consistency_failures, 'pending': d.pending,
             'model': self.engine.model_name, 'states': self.engine.n_states, 'algorithm': self.sc.filter.algorithm,
             'lever_arm_treatment': self.sc.filter.lever_arm_treatment,
-            **_fading_values(e.fading)})
+            **_fading_values(e.fading if e is not None else 1.0)})
 
     def finish(self) -> None:
         # anything still queued (a stream ended early) is processed in stamp order
-        self._publish(self.engine.process(final=True))
+        self._publish(self.engine.process(final=True), self.last.t_ns if self.last is not None else 0)
         self.wait_acked(5.0)
 
     def stats(self) -> dict:
         d = super().stats()
-        d['filter'] = dataclasses.asdict(self.engine.counters)
+        d['filter'] = {**dataclasses.asdict(self.engine.counters), 'rejected_frame_id': self.inputs.rejected_frame_id}
         return d
 
 

@@ -226,6 +226,28 @@ def estimate_to_msgs(e: Estimate, labels: tuple[str, ...], p_w
     return mis, att, st
 
 
+def frame_mismatch(m, frame: str, child: str | None = None) -> str:
+    """'' if the message's header.frame_id (and child_frame_id, when given) are the expected ones,
+    else what was found."""
+    if m.header.frame_id != frame:
+        return f"frame_id '{m.header.frame_id}', expected '{frame}'"
+    if child is not None and m.child_frame_id != child:
+        return f"child_frame_id '{m.child_frame_id}', expected '{child}'"
+    return ''
+
+
+def estimate_to_odometry(e: Estimate) -> Odometry | None:
+    """/alignment/odom: the slave INS solution after the filter's corrections (REP-105: pose in
+    'world', twist in the child frame 'aircraft'); covariances as the estimate gives them (a -1
+    diagonal: not estimated). None if the estimate carries no odometry."""
+    if e.p_w is None or e.v_b is None or e.w_b is None or e.pose_cov is None or e.twist_cov is None:
+        return None
+    m = odometry(e.t_ns, topics.FRAME_WORLD, topics.FRAME_AIRCRAFT, e.p_w, e.q_nb, e.v_b, e.w_b)
+    m.pose.covariance = [float(x) for x in np.asarray(e.pose_cov, dtype=float).ravel()]
+    m.twist.covariance = [float(x) for x in np.asarray(e.twist_cov, dtype=float).ravel()]
+    return m
+
+
 def diagnostics(t_ns: int, name: str, level: bytes, message: str, values: dict) -> DiagnosticArray:
     d = DiagnosticArray()
     d.header.stamp = stamp(t_ns)

@@ -2,9 +2,11 @@
 
 A run claims a domain by holding an exclusive lock on /tmp/alignment_ros_domains/<id>.lock for
 its lifetime (released automatically when the process exits, even when killed), so parallel
-graph runs, replays and tests never hear each other. Which domain (`for_run`): the one asked
-for (--domain-id), else an exported ROS_DOMAIN_ID, else a free one of 1..101 (valid for Fast
-DDS with default ports on Linux), tried in a random order.
+graph runs, replays and tests never hear each other. A launcher hands the lock's descriptor to
+the processes it starts (:func:`lock_fd`, ``Popen(pass_fds=...)``): the lock is one open file
+shared by all of them, so the domain stays claimed until the last process of the run is gone.
+Which domain (`for_run`): the one asked for (--domain-id), else an exported ROS_DOMAIN_ID, else
+a free one of 1..101 (valid for Fast DDS with default ports on Linux), tried in a random order.
 """
 from __future__ import annotations
 
@@ -13,12 +15,13 @@ import os
 import random
 import re
 from pathlib import Path
+from typing import TextIO
 
 LOCK_DIR = Path(os.environ.get('ALIGN_DOMAIN_LOCKS', '/tmp/alignment_ros_domains'))
 DOMAINS = tuple(range(1, 102))
 MAX_DOMAIN = 232    # rmw's limit on any platform (Fast DDS port arithmetic)
 
-_held: dict[int, object] = {}
+_held: dict[int, TextIO] = {}
 
 
 def claim(preferred: int | None = None) -> int:
@@ -45,6 +48,12 @@ def claim(preferred: int | None = None) -> int:
         _held[dom] = f
         return dom
     raise RuntimeError('no free ROS domain id in 1..101')
+
+
+def lock_fd(dom: int) -> int:
+    """The descriptor of this process's lock on `dom` (for children to inherit); KeyError if
+    this process does not hold it."""
+    return _held[dom].fileno()
 
 
 def release(dom: int) -> None:

@@ -9,16 +9,18 @@ has acknowledged every message they sent; their published counts go to the recor
 (stats/published.json), which records until it has all of them (no quiet-period guess: on a
 loaded machine a message the transport dropped arrives seconds later, when the reliable
 protocol resends it); then the summary is computed from the bag.
+
+Exit status: 0 for a complete run; 1 for any other (a message lost or from a foreign
+publisher, a run cut short, a process that failed, a bag that had to be repaired: the table's
+last line and summary.json's ``complete``/``problems`` say which); 130/143 when stopped by
+SIGINT/SIGTERM (every process stopped, the bag closed, one line); 2 for a bad command line.
+The processes of a run never outlive it (:mod:`alignment_ros.launch`).
 """
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import signal
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -27,8 +29,23 @@ import yaml
 from alignment_core.config import scenario as core_scenario
 from alignment_core.validation import ConfigError
 
-from . import domain, summary, topics
+from . import summary, topics
+from .bag import BagError
+from .launch import (
+    OneLineParser,
+    Run,
+    domain_id,
+    finish_recording,
+    guarded_main,
+    number_type,
+    published_counts,
+    root,
+    start_recorder,
+    watch_end_time,
+)
 from .params import given_parameters
+from .shm_cleanup import clean_stale
+from .signals import Interrupted, SignalGuard
 
 # matched subscriptions (recorder included) each node waits for before it sends on a topic
 MATCHED = {
@@ -40,6 +57,49 @@ MATCHED = {
     'alignment_filter_node': {t: 1 for t in topics.FILTER_OUTPUT_TOPICS},
 }
 NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node')
+AIR_DATA_TOPICS = (*topics.FADS_PORT_TOPICS, topics.AIR_DATA_VELOCITY, topics.AIR_DATA_STATIC_PRESSURE,
+                   topics.AIR_DATA_TOTAL_PRESSURE, topics.AIR_DATA_WIND, topics.AIR_DATA_STATE,
+                   topics.TRUTH_AIR_DATA_STATE, topics.TRUTH_WIND)
+
+
+def nodes_of(sc: core_scenario.Scenario) -> tuple[str, ...]:
+    """The nodes of a scenario's run (consumers before producers; the ship node last)."""
+    if not sc.fads.enabled:
+        return NODES
+    return ('air_data_filter_node', 'alignment_filter_node', 'ldv_node', 'air_data_node', 'slave_ins_node',
+            'master_ins_node')
+
+
+def matched_of(sc: core_scenario.Scenario) -> dict[str, dict[str, int]]:
+    """MATCHED with the subscriptions the scenario's optional nodes add (each count: its
+    readers, the recorder included)."""
+    m = {k: dict(v) for k, v in MATCHED.items()}
+    air, ref = sc.fads.enabled, sc.reference_ins.enabled
+    paper, aligned = sc.air_data_filter.form == 'paper', sc.air_data_filter.ins_source == 'aligned'
+    if air:
+        m['air_data_node'] = {**{t: 2 for t in topics.FADS_PORT_TOPICS}, topics.TRUTH_AIR_DATA_STATE: 1,
+                              topics.TRUTH_WIND: 1}
+        m['air_data_filter_node'] = {t: 1 for t in (topics.AIR_DATA_VELOCITY, topics.AIR_DATA_STATIC_PRESSURE,
+                                                    topics.AIR_DATA_TOTAL_PRESSURE, topics.AIR_DATA_WIND,
+                                                    topics.AIR_DATA_STATE, topics.DIAGNOSTICS)}
+        m['slave_ins_node'][topics.TRUTH_AIRCRAFT_ODOM] += 1
+        m['slave_ins_node'][topics.AIRCRAFT_IMU] += int(paper)
+        m['alignment_filter_node'][topics.ALIGN_ODOM] += int(aligned)
+    if ref:
+        m['slave_ins_node'][topics.REFERENCE_INS_ODOM] = 1 + int(air and not aligned)
+    return m
+
+
+def recorded_of(sc: core_scenario.Scenario) -> list[str]:
+    """The topics a run records: every one of the interface, optional sensors' only when enabled
+    (no empty topics in the bag)."""
+    return [t for t in topics.TOPIC_TYPES
+            if (t != topics.DOPPLER_TWIST or sc.doppler.enabled) and (t not in AIR_DATA_TOPICS or sc.fads.enabled)
+            and (t != topics.REFERENCE_INS_ODOM or sc.reference_ins.enabled)]
+
+
+def end_topics_of(sc: core_scenario.Scenario) -> tuple[str, ...]:
+    return END_TOPICS + ((topics.FADS_PORT_TOPICS[-1], topics.AIR_DATA_STATE) if sc.fads.enabled else ())
 
 
 def _list_param(name: str, items: dict[str, int]) -> str:
@@ -50,25 +110,6 @@ def _list_param(name: str, items: dict[str, int]) -> str:
 # processed everything); the recorder then waits for the publishers' final counts of every topic
 END_TOPICS = (topics.SHIP_ODOM, topics.MASTER_ODOM, topics.AIRCRAFT_IMU, topics.LDV_TWIST,
               topics.TRUTH_AIRCRAFT_ODOM, topics.ALIGN_MISALIGNMENT)
-NODE_STOP_TIMEOUT_S = 60.0    # > node_util.ACK_TIMEOUT_S: nodes wait for acknowledgements
-RECORDER_EXPECT_TIMEOUT_S = 120.0
-
-
-def root() -> Path:
-    return Path(os.environ.get('ALIGN_ROOT', Path(__file__).resolve().parents[3]))
-
-
-def use_domain(given: int | None, prog: str = 'run_graph') -> int:
-    """Claim this run's ROS domain (--domain-id, else an exported ROS_DOMAIN_ID, else a free
-    one) and export it to the processes it starts; one that cannot be had ends the run (2)."""
-    try:
-        dom = domain.for_run(given)
-    except RuntimeError as e:
-        print(f'{prog}: {e}', file=sys.stderr)
-        raise SystemExit(2) from None
-    os.environ['ROS_DOMAIN_ID'] = str(dom)
-    print(f'ROS_DOMAIN_ID={dom}  (to watch: ROS_DOMAIN_ID={dom} scripts/echo.sh TOPIC)', flush=True)
-    return dom
 
 
 def params_yaml(given: dict, sc: core_scenario.Scenario, header: str = '') -> str:
@@ -82,115 +123,40 @@ def write_params(given: dict, sc: core_scenario.Scenario, path: Path) -> None:
     path.write_text(params_yaml(given, sc))
 
 
-def start(name: str, params: Path, out: Path, *args: str) -> subprocess.Popen:
+def start(run: Run, name: str, params: Path, *args: str, matched: dict[str, dict[str, int]] = MATCHED
+          ) -> subprocess.Popen:
+    """Start a node of the run through scripts/start_node.sh, its output to logs/NAME.log."""
+    out = run.out
     log = open(out / 'logs' / f'{name}.log', 'w')
     cmd = [str(root() / 'scripts' / 'start_node.sh'), name, '--params-file', str(params),
            '--ros-args', '-p', f'stats_path:={out / "stats" / (name + ".json")}', *args]
-    if name in MATCHED and not any('hold_until_matched' in x for x in args):
-        cmd += ['-p', _list_param('hold_until_matched', MATCHED[name]), '-p', 'hold_for_node:=recorder']
-    return subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    if name in matched and not any('hold_until_matched' in x for x in args):
+        cmd += ['-p', _list_param('hold_until_matched', matched[name]), '-p', 'hold_for_node:=recorder']
+    return run.spawn(name, cmd, stdout=log, stderr=subprocess.STDOUT)
 
 
-def start_recorder(out: Path, bag: Path, end_time_s: float, topic_list, wait_topics,
-                   name: str = 'recorder', expect_counts: Path | None = None) -> subprocess.Popen:
-    """Start the recorder and wait for its ``ready`` line. With expect_counts it records, after
-    end-time, until every topic has the count that file gives (see :func:`finish_recording`)."""
-    cmd = [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/recorder'),
-           '--output', str(bag), '--node-name', 'recorder', '--idle-timeout', '5',
-           '--end-time', repr(end_time_s), '--stats',
-           str(out / 'stats' / f'{name}.json'), '--topics', *topic_list,
-           '--wait-topics', *wait_topics]
-    if expect_counts is not None:
-        cmd += ['--expect-counts', str(expect_counts),
-                '--expect-timeout', repr(RECORDER_EXPECT_TIMEOUT_S)]
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=open(out / 'logs' / f'{name}.log', 'w'),
-                         text=True, start_new_session=True)
-    deadline = time.monotonic() + 60
-    for line in p.stdout:
-        if 'ready' in line:
-            return p
-        if time.monotonic() > deadline:
-            break
-    raise RuntimeError(f'{name} did not become ready; see {out}/logs/{name}.log')
-
-
-def watch_end_time(recorder: subprocess.Popen) -> threading.Event:
-    """An event set when the recorder prints that end-time is reached (its stdout is read to
-    the end in a background thread)."""
-    reached = threading.Event()
-
-    def read() -> None:
-        for line in recorder.stdout:
-            if 'end-time reached' in line:
-                reached.set()
-    threading.Thread(target=read, daemon=True).start()
-    return reached
-
-
-def write_expected_counts(path: Path, counts: dict[str, int]) -> None:
-    """Atomically (the recorder polls for the file)."""
-    tmp = path.with_suffix('.tmp')
-    tmp.write_text(json.dumps(counts, indent=1, sort_keys=True) + '\n')
-    os.replace(tmp, path)
-
-
-def finish_recording(procs: dict[str, subprocess.Popen], out: Path, expect_counts: Path) -> None:
-    """End of a run, in order: stop the nodes (each exits once its subscribers acknowledged
-    every message), give the recorder their published counts, wait until it has recorded them."""
-    stop({n: p for n, p in procs.items() if n != 'recorder'}, timeout=NODE_STOP_TIMEOUT_S)
-    write_expected_counts(expect_counts, published_counts(out))
-    rec = procs['recorder']
-    try:
-        rec.wait(RECORDER_EXPECT_TIMEOUT_S + 30.0)
-    except subprocess.TimeoutExpired:
-        stop({'recorder': rec})
-    stats = out / 'stats' / 'recorder.json'
-    if stats.exists():
-        st = json.loads(stats.read_text())
-        if st.get('missing'):
-            print(f'warning: the recorder ended ({st["end_reason"]}) without '
-                  f'{st["missing"]}', file=sys.stderr)
-
-
-def stop(procs: dict[str, subprocess.Popen], timeout: float = 15.0) -> None:
-    for p in procs.values():
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGINT)
-    deadline = time.monotonic() + timeout
-    for name, p in procs.items():
-        try:
-            p.wait(max(0.1, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
-            print(f'warning: {name} did not stop in time and was killed', file=sys.stderr)
-
-
-def published_counts(out: Path, with_held: bool = False) -> dict[str, int]:
-    """Messages the nodes sent, per topic (from their stats files); with_held: plus those they
-    still held at exit because their subscribers never matched (sent nowhere: lost too)."""
-    pub: dict[str, int] = {}
-    for f in sorted((out / 'stats').glob('*_node.json')):
-        st = json.loads(f.read_text())
-        items = list(st.get('published', {}).items())
-        if with_held:
-            items += list(st.get('held_unsent', {}).items())
-        for k, v in items:
-            pub[k] = pub.get(k, 0) + v
-    return pub
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    ap = OneLineParser(prog='run_graph.sh', description=__doc__,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument('--scenario', default='catapult')
+    ap.add_argument('--out', type=Path, default=None)
+    ap.add_argument('--seed', type=number_type(0, kind=int), default=None)
+    ap.add_argument('--set', dest='sets', action='append', default=[], metavar='KEY=VALUE')
+    ap.add_argument('--real-time-factor', type=number_type(0.0), default=5.0,
+                    help='simulation speed: 1 = real time, 0 = as fast as possible (default 5)')
+    ap.add_argument('--timeout', type=number_type(0.0, strict=True), default=None,
+                    help='wall seconds before giving up (default 120 + 3 x duration)')
+    ap.add_argument('--domain-id', type=domain_id, default=None,
+                    help='ROS_DOMAIN_ID for the run (default: the exported ROS_DOMAIN_ID, else a '
+                         'free one; printed at the start)')
+    return ap.parse_args(argv)
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog='run_graph.sh', description=__doc__)
-    ap.add_argument('--scenario', default='catapult')
-    ap.add_argument('--out', type=Path, default=None)
-    ap.add_argument('--seed', type=int, default=None)
-    ap.add_argument('--set', dest='sets', action='append', default=[], metavar='KEY=VALUE')
-    ap.add_argument('--real-time-factor', type=float, default=5.0)
-    ap.add_argument('--timeout', type=float, default=None, help='wall seconds before giving up')
-    ap.add_argument('--domain-id', type=int, default=None,
-                    help='ROS_DOMAIN_ID for the run (default: the exported ROS_DOMAIN_ID, else a '
-                         'free one; printed at the start)')
-    a = ap.parse_args(argv)
+    return guarded_main('run_graph', _main, parse_args(argv))
+
+
+def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
     try:
         given = core_scenario.given_data(a.scenario, core_scenario.parse_overrides(a.sets), a.seed)
         sc = core_scenario.resolve(given)
@@ -203,46 +169,81 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     for d in ('logs', 'stats'):
         (out / d).mkdir(parents=True, exist_ok=True)
-    use_domain(a.domain_id)
+    run = Run('run_graph', out, guard)
+    run.use_domain(a.domain_id)
+    clean_stale(log=lambda m: print(f'run_graph: {m}', file=sys.stderr))   # killed runs' /dev/shm
     (out / 'scenario.yaml').write_text(core_scenario.dump(sc))
     params = out / 'params.yaml'
     write_params(given, sc, params)
+    wall = _run(run, a, sc, params)
+    run.end(out / 'bag')
+    s = _summary(run, sc, wall)
+    if run.interrupted is not None:
+        print(run.stopped_line(s), file=sys.stderr)
+    else:
+        if run.failure is not None:
+            print(f'run_graph: {run.failure}', file=sys.stderr)
+        if s is not None:
+            print(summary.table(s))
+        print(f'output: {out}')
+    return run.exit_code(s is not None and s['complete'])
+
+
+def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Path) -> float:
+    """Start the recorder and the nodes, wait until every stream reached the end, finish the
+    recording; return the wall time to the end (or to the cut: run.interrupted/failure)."""
+    out = run.out
     end_s = sc.start_time_s + sc.duration_s
-    procs: dict[str, subprocess.Popen] = {}
     wall0 = time.monotonic()
     try:
-        # optional sensors' topics are recorded only when enabled (no empty topics in the bag)
-        recorded = [t for t in topics.TOPIC_TYPES if t != topics.DOPPLER_TWIST or sc.doppler.enabled]
+        matched = matched_of(sc)
         expect = out / 'stats' / 'published.json'
-        procs['recorder'] = start_recorder(out, out / 'bag', end_s, recorded, END_TOPICS,
-                                           expect_counts=expect)
-        end_reached = watch_end_time(procs['recorder'])
-        for n in NODES:
-            procs[n] = start(n, params, out)
-        procs['ship_motion_node'] = start(
-            'ship_motion_node', params, out, '-p', f'real_time_factor:={a.real_time_factor}',
-            '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']))
+        rec = start_recorder(run, out / 'bag', end_s, recorded_of(sc), end_topics_of(sc), expect_counts=expect)
+        end_reached = watch_end_time(rec)
+        for n in nodes_of(sc):
+            start(run, n, params, matched=matched)
+        start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',
+              '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']))
         timeout = a.timeout or 120.0 + 3.0 * sc.duration_s
         deadline = time.monotonic() + timeout
-        while procs['recorder'].poll() is None and not end_reached.is_set():
-            for n, p in procs.items():
-                if n != 'recorder' and p.poll() not in (None, 0):
-                    raise RuntimeError(f'{n} exited with {p.returncode}; see {out}/logs/{n}.log')
+        while rec.poll() is None and not end_reached.is_set():
+            run.check_running()
             if time.monotonic() > deadline:
                 raise RuntimeError(f'run did not finish within {timeout:.0f} s')
             time.sleep(0.2)
         wall = time.monotonic() - wall0
+        if not end_reached.is_set():
+            raise RuntimeError('the run was cut: the recorder ended before the end time')
+        finish_recording(run, expect)
+        return wall
+    except Interrupted as e:
+        run.interrupted = e
     except RuntimeError as e:
-        print(f'run_graph: {e}', file=sys.stderr)
-        stop(procs)
-        return 1
-    finish_recording(procs, out, expect)
-    s = summary.summarise(out / 'bag', out / 'bag', sc.duration_s, wall,
-                          published_counts(out, with_held=True))
+        run.failure = str(e)
+    finally:
+        run.guard.ignore()      # the end is bounded: stop, repair, summarise
+    return time.monotonic() - wall0
+
+
+def _summary(run: Run, sc: core_scenario.Scenario, wall: float) -> dict | None:
+    """Write summary.json (for a cut run too: complete false); return it, or None if there is
+    no bag to read."""
+    bag = run.out / 'bag'
+    ours = {n for n in run.procs if n != 'recorder'}
+    try:
+        s = summary.summarise(bag, bag, sc.start_time_s, sc.duration_s, wall,
+                              published_counts(run.out, with_held=True),
+                              run.foreign_publishers(ours), run.problems,
+                              published_known=not run.unknown_counts())
+    except (BagError, OSError) as e:
+        summary.write({'complete': False, 'lost_total': None,
+                       'problems': [*run.problems, f'no bag to read: {e}'],
+                       'scenario': sc.name, 'seed': sc.seed}, run.out)
+        return None
     s['scenario'] = sc.name
     s['seed'] = sc.seed
-    summary.report(s, out)
-    return 0
+    summary.write(s, run.out)
+    return s
 
 
 if __name__ == '__main__':

@@ -1,8 +1,10 @@
 """Linear scan of a (possibly truncated) MCAP file: every complete record it still holds.
 
 Used for files without a valid footer/summary: a recording that was killed (its spool is plain
-records) or a copy cut short. Uncompressed chunks cut in the middle still yield their complete
-messages; a cut compressed chunk is lost as a whole.
+records) or a copy cut short. Chunks cut in the middle still yield their complete messages
+(a zstd or lz4 chunk: what its compressed prefix decodes to). Besides the schema names and the
+channels' topics it keeps what a rewrite of the file needs (:mod:`alignment_ros.bag_reindex`):
+the schemas' encoding and data, the channels' message encoding and metadata.
 """
 from __future__ import annotations
 
@@ -19,6 +21,8 @@ class Salvage:
         self.buf = memoryview(buf)
         self.schemas: dict[int, str] = {}
         self.channels: dict[int, tuple[str, int]] = {}
+        self.schema_data: dict[int, tuple[str, bytes]] = {}       # id -> (encoding, data)
+        self.channel_info: dict[int, tuple[str, dict[str, str]]] = {}  # id -> (encoding, metadata)
         self.messages: list[tuple[int, int, int, bytes]] = []  # (log_time, seq, channel, data)
         self.complete = False
         self.good_end = 8  # end offset of the last complete record (top-level buffer)
@@ -27,6 +31,15 @@ class Salvage:
     def _str(buf: memoryview, pos: int) -> tuple[str, int]:
         (n,) = struct.unpack_from('<I', buf, pos)
         return bytes(buf[pos + 4:pos + 4 + n]).decode(), pos + 4 + n
+
+    @classmethod
+    def _map(cls, buf: memoryview, pos: int) -> dict[str, str]:
+        (n,) = struct.unpack_from('<I', buf, pos)
+        end, pos, out = pos + 4 + n, pos + 4, {}
+        while pos < end:
+            k, pos = cls._str(buf, pos)
+            out[k], pos = cls._str(buf, pos)
+        return out
 
     def scan(self, start: int, end: int) -> bool:
         """Scan records in buf[start:end]; return True if the range ended on a record boundary."""
@@ -44,12 +57,17 @@ class Salvage:
                 return False
             if op == 0x03:  # Schema
                 (sid,) = struct.unpack_from('<H', buf, body)
-                name, _ = self._str(buf, body + 2)
+                name, p = self._str(buf, body + 2)
                 self.schemas[sid] = name
+                encoding, p = self._str(buf, p)
+                (n,) = struct.unpack_from('<I', buf, p)
+                self.schema_data[sid] = (encoding, bytes(buf[p + 4:p + 4 + n]))
             elif op == 0x04:  # Channel
                 cid, sid = struct.unpack_from('<HH', buf, body)
-                topic, _ = self._str(buf, body + 4)
+                topic, p = self._str(buf, body + 4)
                 self.channels[cid] = (topic, sid)
+                encoding, p = self._str(buf, p)
+                self.channel_info[cid] = (encoding, self._map(buf, p))
             elif op == 0x05:  # Message
                 cid, _seq, log_time = struct.unpack_from('<HIQ', buf, body)
                 data = bytes(buf[body + 22:body_end])
@@ -77,22 +95,26 @@ class Salvage:
         if not compression:
             self.scan(rec_start, rec_end)
             return
-        if partial:
-            return
         raw = bytes(buf[rec_start:rec_end])
         try:
-            if compression == 'zstd':
-                import zstandard
-                (size,) = struct.unpack_from('<Q', buf, body + 16)
-                raw = zstandard.ZstdDecompressor().decompress(raw, max_output_size=size)
-            elif compression == 'lz4':
-                import lz4.frame
-                raw = lz4.frame.decompress(raw)
-            else:
-                raise ValueError(f'unsupported compression {compression!r}')
+            raw = _decompress(compression, raw, partial)
         except Exception as exc:  # noqa: BLE001  (decompressors raise their own error types)
             log.warning('MCAP chunk skipped: %s', exc)
             return
         inner = Salvage(raw)
-        inner.schemas, inner.channels, inner.messages = self.schemas, self.channels, self.messages
+        for k in ('schemas', 'channels', 'schema_data', 'channel_info', 'messages'):
+            setattr(inner, k, getattr(self, k))
         inner.scan(0, len(raw))
+
+
+def _decompress(compression: str, raw: bytes, partial: bool) -> bytes:
+    """A chunk's records; of a cut chunk (`partial`), what its compressed prefix decodes to."""
+    if compression == 'zstd':
+        import zstandard
+        return zstandard.ZstdDecompressor().decompressobj().decompress(raw)
+    if compression == 'lz4':
+        import lz4.frame
+        if partial:
+            return lz4.frame.LZ4FrameDecompressor().decompress(raw)
+        return lz4.frame.decompress(raw)
+    raise ValueError(f'unsupported compression {compression!r}')

@@ -1,6 +1,7 @@
 """Shared node plumbing: start-up with clear config errors, publish counters, stats file,
-clean shutdown on SIGINT/SIGTERM (held messages sent, every message acknowledged by every
-reliable subscriber before the process exits)."""
+publishes that wait for slow subscribers instead of failing, clean shutdown on SIGINT/SIGTERM
+(held messages sent, every message acknowledged by every reliable subscriber before the process
+exits)."""
 from __future__ import annotations
 
 import json
@@ -29,6 +30,16 @@ ACK_TIMEOUT_S = 30.0
 message the transport dropped is resent only at the writer's next heartbeat (Fast DDS: every
 3 s); a process that exits before then takes it with it."""
 
+PUBLISH_REFUSED = 'cannot publish data'
+"""rmw_fastrtps's error when the DataWriter refuses a write: for a RELIABLE KEEP_ALL writer, its
+history is full of messages a reader has not acknowledged yet and none was within
+reliability.max_blocking_time (config/dds/fastdds.xml). The message was not taken: sending it
+again neither duplicates nor reorders anything."""
+PUBLISH_STALL_TIMEOUT_S = 120.0
+"""How long `CountingNode.send` retries one refused publish before it gives up. Longer than Fast
+DDS's participant lease (20 s): a subscriber that died is unmatched by then and no longer holds
+the writer back, so only a reader that is alive and takes nothing for this long ends the node."""
+
 
 class CountingNode(Node):
     """A node that counts what it publishes and receives and can write them to a JSON file."""
@@ -38,6 +49,8 @@ class CountingNode(Node):
         self.published: Counter = Counter()
         self.received: Counter = Counter()
         self.rejected: Counter = Counter()
+        self.publish_waits: Counter = Counter()      # publishes refused (writer history full), retried
+        self.publish_wait_s: Counter = Counter()     # wall seconds spent waiting, per topic
         self.declare_parameter('stats_path', '', ParameterDescriptor(
             description='write publish/receive counts here (JSON) at shutdown; empty: do not'))
         self.declare_parameter('hold_until_matched', [''], ParameterDescriptor(
@@ -89,9 +102,35 @@ class CountingNode(Node):
                 return
             del self._need[topic]
             for m in self._held.pop(topic, []):
-                self._pubs[topic].publish(m)
-                self.published[topic] += 1
-        self._pubs[topic].publish(msg)
+                self._publish_or_wait(topic, m)
+        self._publish_or_wait(topic, msg)
+
+    def _publish_or_wait(self, topic: str, msg) -> None:
+        """Publish and count. While the transport refuses the message (PUBLISH_REFUSED: the
+        writer's history is full and no subscriber acknowledged within max_blocking_time), wait
+        and publish it again, backing off to 0.1 s, for up to PUBLISH_STALL_TIMEOUT_S. Nothing is
+        dropped or reordered: the caller does not go on before this message is taken."""
+        pub = self._pubs[topic]
+        t0: float | None = None
+        pause = 0.001
+        while True:
+            try:
+                pub.publish(msg)
+                break
+            except RCLError as e:
+                if PUBLISH_REFUSED not in str(e):
+                    raise
+                now = time.monotonic()
+                t0 = now if t0 is None else t0
+                self.publish_waits[topic] += 1
+                if now - t0 > PUBLISH_STALL_TIMEOUT_S:
+                    raise RuntimeError(
+                        f'{topic}: a subscriber acknowledged nothing for {now - t0:.0f} s; '
+                        f'message {self.published[topic] + 1} could not be published') from e
+                time.sleep(pause)
+                pause = min(2.0 * pause, 0.1)
+        if t0 is not None:
+            self.publish_wait_s[topic] += time.monotonic() - t0
         self.published[topic] += 1
 
     def flush_held(self) -> None:
@@ -100,8 +139,7 @@ class CountingNode(Node):
             if self._matched(topic):
                 del self._need[topic]
                 for m in self._held.pop(topic, []):
-                    self._pubs[topic].publish(m)
-                    self.published[topic] += 1
+                    self._publish_or_wait(topic, m)
 
     def held(self) -> dict[str, int]:
         """Messages still held back because their subscribers never matched."""
@@ -125,6 +163,8 @@ class CountingNode(Node):
         return {'node': self.get_name(), 'published': dict(self.published),
                 'received': dict(self.received), 'rejected': dict(self.rejected),
                 'held_unsent': self.held(), 'all_acked': self._all_acked,
+                'publish_waits': dict(self.publish_waits),
+                'publish_wait_s': {t: round(v, 3) for t, v in self.publish_wait_s.items()},
                 'cpu_s': time.process_time()}
 
     def write_stats(self) -> None:

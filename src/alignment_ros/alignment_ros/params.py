@@ -45,11 +45,16 @@ DECK_SPOT = ('aircraft.lever_arm_m', 'aircraft.heading_on_deck_deg')
 NODE_SCOPES: dict[str, Scope] = {
     'ship_motion_node': Scope(('name', 'duration_s', *TIMING, 'ship')),
     'master_ins_node': Scope((*TIMING, *ORIGIN, 'master')),
-    'slave_ins_node': Scope((*TIMING, *ORIGIN, 'aircraft', 'imu')),
+    'slave_ins_node': Scope((*TIMING, *ORIGIN, 'aircraft', 'imu', 'reference_ins')),
     # the deck spot and the catapult give the LDV's origin, heading and track length by default
     'ldv_node': Scope((*TIMING, *ORIGIN, *DECK_SPOT, 'aircraft.catapult', 'ldv', 'doppler')),
     # what a user knows: the IMU rate, the origin, the surveyed deck spot; no simulation section
     'alignment_filter_node': Scope(('rate_hz', *ORIGIN, *DECK_SPOT, 'filter')),
+    'air_data_node': Scope((*TIMING, *ORIGIN, 'fads')),
+    # the installed sensor's known calibration (port geometry, eps(M)) and the IMU rate; never
+    # the sensor's noise truth or faults
+    'air_data_filter_node': Scope(('rate_hz', *ORIGIN, 'fads.rate_hz', 'fads.cone_deg', 'fads.clock_deg',
+                                   'fads.eps_mach', 'fads.eps', 'air_data_filter')),
 }
 """The scenario keys (sections or single keys) each node reads."""
 

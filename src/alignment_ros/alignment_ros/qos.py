@@ -1,4 +1,8 @@
-"""QoS profiles: simulation streams are RELIABLE + KEEP_ALL so that no message is lost."""
+"""QoS profiles: simulation streams are RELIABLE + KEEP_ALL so that no message is lost.
+
+KEEP_ALL is back-pressure: a writer holds at most Fast DDS's resource_limits.max_samples (5000)
+messages its slowest reader has not acknowledged; then a publish waits (max_blocking_time,
+config/dds/fastdds.xml) and CountingNode.send publishes it again until it is taken."""
 from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy

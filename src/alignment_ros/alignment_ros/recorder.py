@@ -13,7 +13,8 @@ Log time: simulation time, see :mod:`alignment_ros.bag`.
 
 End: the recorder stops at the first of
 
-* ``signal``: SIGINT or SIGTERM (``ros2 bag record``'s only end);
+* ``signal``: SIGINT or SIGTERM (``ros2 bag record``'s only end); what already reached the
+  subscriptions' readers is still recorded;
 * ``end_time``: ``--end-time`` is given and every topic of ``--wait-topics`` has received a
   message stamped >= end-time (for a topic without a stamp: its log time); without
   ``--wait-topics``, every topic with a stamp that has received anything must reach it. It
@@ -27,6 +28,10 @@ End: the recorder stops at the first of
 * ``idle_timeout``: ``--idle-timeout`` S > 0 and nothing arrived for S wall seconds after the
   first message.
 
+The publishers of every recorded topic are looked up in the graph every second; the stats list
+them (``publishers``: topic -> {node: how many distinct publishers it had there}), so a launcher
+can tell a message from a publisher that is not one of its run's.
+
 While a topic is short of its expected count the recorder also takes from its subscription
 directly, so a message that reached the reader is never left behind. It then closes the bag
 (sorted files, metadata.yaml) and writes ``--stats``. It prints ``recorder ready`` (one flushed
@@ -38,6 +43,7 @@ import argparse
 import json
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -59,7 +65,8 @@ from .signals import stop_on_signals
 NS = 1_000_000_000
 SPIN_TIMEOUT_S = 0.05
 FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed recorder keeps)
-
+PUBLISHERS_INTERVAL_S = 1.0  # the recorded topics' publishers are looked up this often
+UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # rmw's name of a node not yet discovered
 
 
 def qos_dict(q: QoSProfile) -> dict[str, Any]:
@@ -104,7 +111,6 @@ def read_expected(path: Path) -> dict[str, int] | None:
     return {str(k): int(v) for k, v in json.loads(text).items()}
 
 
-
 def info(text: str) -> None:
     """A log line on stderr (stdout carries the lines the launcher waits for)."""
     print(f'[INFO] [recorder]: {text}', file=sys.stderr, flush=True)
@@ -135,6 +141,7 @@ class Recorder:
         self.handlers: dict[str, Any] = {}
         self._endpoints_known: set[str] = set()
         self._unusable: set[str] = set()
+        self._publisher_names: dict[str, dict[str, str]] = {}   # topic -> {endpoint GID: node}
         for topic, type_name in topics.items():
             self.subscribe(topic, type_name, STREAM)
 
@@ -181,6 +188,21 @@ class Recorder:
             self.writer.set_topic_endpoints(topic, [qos_dict(i.qos_profile) for i in infos],
                                             endpoints_hash(infos))
             self._endpoints_known.add(topic)
+
+    def note_publishers(self) -> None:
+        """Remember the publishers of each recorded topic (by endpoint GID, with the node name
+        once the graph knows it): a launcher compares them with its own nodes."""
+        for topic in self.subscriptions:
+            seen = self._publisher_names.setdefault(topic, {})
+            for i in self.node.get_publishers_info_by_topic(topic):
+                name = i.node_namespace.rstrip('/') + '/' + i.node_name
+                gid = bytes(i.endpoint_gid).hex()
+                if gid not in seen or UNKNOWN_NODE not in name:
+                    seen[gid] = name
+
+    def publishers(self) -> dict[str, dict[str, int]]:
+        """topic -> {node: how many distinct publishers it had on the topic}."""
+        return {t: dict(Counter(seen.values())) for t, seen in self._publisher_names.items()}
 
     def _sim_now(self) -> int:
         return self.node.get_clock().now().nanoseconds if self.use_sim_time else 0
@@ -272,16 +294,21 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any,
     discovering = not args.no_discovery and (args.filter.discovers() or rec.pending_topics())
     next_poll = time.monotonic() + interval
     next_flush = time.monotonic() + FLUSH_INTERVAL_S
+    next_publishers = time.monotonic()
     end_seen: float | None = None
     expected: dict[str, int] | None = None
     while True:
         executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
         if stop['signal']:
+            rec.take_pending(list(rec.subscriptions))   # delivered before the signal: keep it
             return 'signal', expected
         now = time.monotonic()
         if now >= next_flush:
             rec.writer.flush()
             next_flush = now + FLUSH_INTERVAL_S
+        if now >= next_publishers:
+            rec.note_publishers()
+            next_publishers = now + PUBLISHERS_INTERVAL_S
         if discovering and now >= next_poll:
             rec.discover()
             discovering = args.filter.discovers() or bool(rec.pending_topics())
@@ -332,6 +359,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     finally:
         if rec is not None:
             rec.finish_endpoints()
+            rec.note_publishers()
         writer.close()
         executor.shutdown()
         node.destroy_node()
@@ -348,6 +376,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         'missing': rec.missing(expected or {}),
         'taken_directly': rec.taken_directly,
         'last_stamp_ns': rec.last_stamp_ns,
+        'publishers': rec.publishers(),
         'executor': args.executor,
         'receive_span_s': span,
         'receive_rate_msg_s': total / span if span > 0 else None,

@@ -2,7 +2,9 @@
 
 The mounting misalignment is defined while the aircraft rides the deck (/truth/misalignment
 is published only then); the estimate scored is the filter's output at the last such stamp
-(the release, or the end of a deck run), or the latest output before it.
+(the release, or the end of a deck run), or the latest output before it. A summary says
+whether the run is complete (``complete``, ``problems``): a lost message, a foreign one, a run
+cut short or anything the launcher saw go wrong makes it incomplete (and the exit non-zero).
 """
 from __future__ import annotations
 
@@ -14,10 +16,13 @@ from rclpy.serialization import deserialize_message
 
 from alignment_core.units import ARCMIN
 
-from . import topics
+from . import air_data_summary, topics
 from .bag import read_bag, topic_counts
 from .convert import to_ns
 from .topics import msg_class
+
+SCORE_KEYS = ('misalignment_truth_rad', 'misalignment_estimate_rad', 'misalignment_sigma_rad',
+              'misalignment_error_rad', 'scored_at_s', 'estimate_stamp_s')
 
 
 def _read(bag: Path, names: tuple[str, ...]) -> dict[str, list]:
@@ -47,19 +52,71 @@ def truth_from_bag(bag: Path) -> tuple[int, np.ndarray]:
     return to_ns(m.header.stamp), np.array([m.vector.x, m.vector.y, m.vector.z])
 
 
-def summarise(truth_bag: Path, estimate_bag: Path, sim_time_s: float, wall_time_s: float,
-              published: dict[str, int] | None = None) -> dict:
-    t_rel, mu = truth_from_bag(truth_bag)
+def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: float,
+              wall_time_s: float, published: dict[str, int] | None = None,
+              foreign_publishers: dict[str, list[str]] | None = None,
+              problems: list[str] | None = None, published_known: bool = True) -> dict:
+    """The summary of a run of `duration_s` simulated seconds from `start_s`: the score (None
+    when there is nothing to score), counts, losses, foreign messages, and whether the run is
+    complete (no message lost or foreign, outputs up to the end, no `problems` the launcher
+    saw). The simulated time claimed is the one the filter's outputs reached; published_known
+    False: some publishers' counts are missing (more may be lost than `lost` says)."""
     est = estimates_from_bag(estimate_bag)
-    if len(est['t_ns']) == 0:
-        raise ValueError(f'{estimate_bag}: no filter outputs')
+    problems = list(problems or [])
+    air = air_data_summary.score(estimate_bag)
+    score = _score(truth_bag, est, problems, optional=air is not None)
+    own = topic_counts(estimate_bag)
+    counts = {**topic_counts(truth_bag), **own} if Path(truth_bag) != Path(estimate_bag) else own
+    pub = published or {}
+    lost = {k: max(0, pub[k] - counts.get(k, 0)) for k in sorted(pub)}
+    foreign = {k: n - pub.get(k, 0) for k, n in sorted(own.items()) if pub and n > pub.get(k, 0)}
+    end_ns = round((start_s + duration_s) * 1e9)
+    last_ns = int(est['t_ns'][-1]) if len(est['t_ns']) else None
+    reached = duration_s
+    if last_ns is None or last_ns < end_ns - 1000:      # 1 us: the end given as float seconds
+        reached = 0.0 if last_ns is None else max(0.0, last_ns * 1e-9 - start_s)
+        problems.append(f'cut short: the filter outputs reached t = {start_s + reached:.2f} s '
+                        f'of {start_s + duration_s:.2f} s')
+    lost_total = int(sum(lost.values()))
+    if lost_total:
+        problems.append(f'{lost_total} messages lost')
+    if foreign:
+        problems.append(f'{sum(foreign.values())} messages more than the run published')
+    for topic, names in sorted((foreign_publishers or {}).items()):
+        problems.append(f'foreign publisher on {topic}: {", ".join(names)}')
+    return {
+        **score,
+        'air_data': air,
+        'sim_time_s': reached,
+        'planned_sim_time_s': duration_s,
+        'wall_time_s': wall_time_s,
+        'real_time_factor': reached / wall_time_s if wall_time_s > 0 else None,
+        'topics': counts,
+        'published': pub,
+        'lost': lost,
+        'lost_total': lost_total,
+        'published_known': published_known,
+        'foreign': foreign,
+        'foreign_total': int(sum(foreign.values())),
+        'foreign_publishers': foreign_publishers or {},
+        'complete': not problems,
+        'problems': problems,
+    }
+
+
+def _score(truth_bag: Path, est: dict[str, np.ndarray], problems: list[str], optional: bool = False) -> dict:
+    """Truth and estimate at the end of deck matching (None and a problem if unavailable;
+    `optional`: a run with air data and no deck phase has no misalignment to score)."""
+    try:
+        t_rel, mu = truth_from_bag(truth_bag)
+    except ValueError as e:
+        if not optional:
+            problems.append(f'nothing to score: {e}')
+        return dict.fromkeys(SCORE_KEYS)
     i = int(np.searchsorted(est['t_ns'], t_rel, side='right')) - 1
     if i < 0:
-        raise ValueError('no filter output before the end of deck matching')
-    counts = topic_counts(estimate_bag)
-    if Path(truth_bag) != Path(estimate_bag):
-        counts = {**topic_counts(truth_bag), **counts}
-    lost = {k: published[k] - counts.get(k, 0) for k in sorted(published or {})}
+        problems.append('nothing to score: no filter output before the end of deck matching')
+        return dict.fromkeys(SCORE_KEYS)
     return {
         'misalignment_truth_rad': mu.tolist(),
         'misalignment_estimate_rad': est['misalignment'][i].tolist(),
@@ -67,32 +124,44 @@ def summarise(truth_bag: Path, estimate_bag: Path, sim_time_s: float, wall_time_
         'misalignment_error_rad': (est['misalignment'][i] - mu).tolist(),
         'scored_at_s': t_rel * 1e-9,
         'estimate_stamp_s': int(est['t_ns'][i]) * 1e-9,
-        'sim_time_s': sim_time_s,
-        'wall_time_s': wall_time_s,
-        'real_time_factor': sim_time_s / wall_time_s if wall_time_s > 0 else None,
-        'topics': counts,
-        'published': published or {},
-        'lost': lost,
-        'lost_total': int(sum(v for v in lost.values() if v > 0)),
     }
 
 
 def table(s: dict) -> str:
-    mu, est = np.array(s['misalignment_truth_rad']), np.array(s['misalignment_estimate_rad'])
-    sig = np.array(s['misalignment_sigma_rad'])
-    lines = [f"misalignment at t = {s['scored_at_s']:.2f} s (aircraft FLU axes, arcmin)",
-             f"{'axis':<10}{'truth':>10}{'estimate':>10}{'error':>10}{'1 sigma':>10}"]
-    for k, name in enumerate(('x (roll)', 'y (pitch)', 'z (yaw)')):
-        lines.append(f"{name:<10}{mu[k] / ARCMIN:>10.3f}{est[k] / ARCMIN:>10.3f}"
-                     f"{(est[k] - mu[k]) / ARCMIN:>10.3f}{sig[k] / ARCMIN:>10.3f}")
+    lines = []
+    if s.get('misalignment_truth_rad') is not None:
+        mu, est = np.array(s['misalignment_truth_rad']), np.array(s['misalignment_estimate_rad'])
+        sig = np.array(s['misalignment_sigma_rad'])
+        head = f"misalignment at t = {s['scored_at_s']:.2f} s"
+        if abs(s['estimate_stamp_s'] - s['scored_at_s']) > 5e-4:   # the latest output is older
+            head += f", estimate of t = {s['estimate_stamp_s']:.2f} s"
+        lines += [head + ' (aircraft FLU axes, arcmin)',
+                  f"{'axis':<10}{'truth':>10}{'estimate':>10}{'error':>10}{'1 sigma':>10}"]
+        for k, name in enumerate(('x (roll)', 'y (pitch)', 'z (yaw)')):
+            lines.append(f"{name:<10}{mu[k] / ARCMIN:>10.3f}{est[k] / ARCMIN:>10.3f}"
+                         f"{(est[k] - mu[k]) / ARCMIN:>10.3f}{sig[k] / ARCMIN:>10.3f}")
+    else:
+        lines.append('misalignment: nothing to score')
+    if s.get('air_data'):
+        lines += air_data_summary.table_lines(s['air_data'])
     rtf = s.get('real_time_factor')
-    lines.append(f"sim time {s['sim_time_s']:.2f} s, wall time {s['wall_time_s']:.2f} s"
+    planned = s.get('planned_sim_time_s', s['sim_time_s'])
+    lines.append(f"sim time {s['sim_time_s']:.2f} s"
+                 + (f" of {planned:.2f} s" if s['sim_time_s'] < planned else '')
+                 + f", wall time {s['wall_time_s']:.2f} s"
                  + (f", real-time factor {rtf:.2f}" if rtf else ''))
     lines.append('messages recorded (lost):')
+    foreign = s.get('foreign', {})
     for k, v in sorted(s['topics'].items()):
         lost = s['lost'].get(k)
-        lines.append(f"  {k:<28}{v:>8}" + (f"  ({lost})" if lost is not None else ''))
-    lines.append(f"lost messages: {s['lost_total']}")
+        lines.append(f"  {k:<28}{v:>8}" + (f"  ({lost})" if lost is not None else '')
+                     + (f"  {foreign[k]} foreign" if k in foreign else ''))
+    lines.append(f"lost messages: {s['lost_total']}" + (
+        '' if s.get('published_known', True) else ' (some published counts unknown: maybe more)'))
+    if s.get('foreign_total'):
+        lines.append(f"foreign messages: {s['foreign_total']}")
+    lines.append('complete: yes' if s.get('complete') else
+                 'INCOMPLETE: ' + '; '.join(s.get('problems') or ['unknown']))
     return '\n'.join(lines)
 
 

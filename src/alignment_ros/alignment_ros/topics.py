@@ -17,7 +17,20 @@ TRUTH_MASTER_ERROR = '/truth/master_error'
 ALIGN_MISALIGNMENT = '/alignment/misalignment'
 ALIGN_ATTITUDE = '/alignment/attitude'
 ALIGN_STATE = '/alignment/state'
+ALIGN_ODOM = '/alignment/odom'      # the slave INS solution after the filter's corrections
 DIAGNOSTICS = '/diagnostics'
+# air data (the air-data nodes): five-port FADS pressures, the solved air data, and their truth
+FADS_PORT_TOPICS = tuple(f'/fads/port_{k}' for k in range(5))
+AIR_DATA_VELOCITY = '/air_data/velocity'
+AIR_DATA_STATIC_PRESSURE = '/air_data/static_pressure'
+AIR_DATA_TOTAL_PRESSURE = '/air_data/total_pressure'
+AIR_DATA_WIND = '/air_data/wind'
+AIR_DATA_STATE = '/air_data/state'
+TRUTH_AIR_DATA_STATE = '/truth/air_data/state'
+TRUTH_WIND = '/truth/wind'
+AIR_DATA_TOPICS = (*FADS_PORT_TOPICS, AIR_DATA_VELOCITY, AIR_DATA_STATIC_PRESSURE, AIR_DATA_TOTAL_PRESSURE,
+                   AIR_DATA_WIND, AIR_DATA_STATE, TRUTH_AIR_DATA_STATE, TRUTH_WIND)
+REFERENCE_INS_ODOM = '/reference_ins/odom'   # a reference INS (scenarios without a deck phase)
 
 # topic -> ROS type name (package/msg/Type), as stored in bags
 TOPIC_TYPES: dict[str, str] = {
@@ -37,17 +50,35 @@ TOPIC_TYPES: dict[str, str] = {
     ALIGN_MISALIGNMENT: 'geometry_msgs/msg/Vector3Stamped',
     ALIGN_ATTITUDE: 'geometry_msgs/msg/PoseWithCovarianceStamped',
     ALIGN_STATE: 'std_msgs/msg/Float64MultiArray',
+    ALIGN_ODOM: 'nav_msgs/msg/Odometry',
     DIAGNOSTICS: 'diagnostic_msgs/msg/DiagnosticArray',
+    **{t: 'sensor_msgs/msg/FluidPressure' for t in FADS_PORT_TOPICS},
+    AIR_DATA_VELOCITY: 'geometry_msgs/msg/TwistWithCovarianceStamped',
+    AIR_DATA_STATIC_PRESSURE: 'sensor_msgs/msg/FluidPressure',
+    AIR_DATA_TOTAL_PRESSURE: 'sensor_msgs/msg/FluidPressure',
+    AIR_DATA_WIND: 'geometry_msgs/msg/TwistWithCovarianceStamped',
+    AIR_DATA_STATE: 'std_msgs/msg/Float64MultiArray',
+    TRUTH_AIR_DATA_STATE: 'std_msgs/msg/Float64MultiArray',
+    TRUTH_WIND: 'geometry_msgs/msg/Vector3Stamped',
+    REFERENCE_INS_ODOM: 'nav_msgs/msg/Odometry',
 }
 
 # what a replay feeds into a fresh filter
 SENSOR_TOPICS = (CLOCK, MASTER_ODOM, AIRCRAFT_IMU, LDV_TWIST)
-FILTER_OUTPUT_TOPICS = (ALIGN_MISALIGNMENT, ALIGN_ATTITUDE, ALIGN_STATE, DIAGNOSTICS)
+FILTER_OUTPUT_TOPICS = (ALIGN_MISALIGNMENT, ALIGN_ATTITUDE, ALIGN_STATE, ALIGN_ODOM, DIAGNOSTICS)
 
 # frames (REP-103/105): nav frame is local-level ENU; bodies are FLU
 FRAME_WORLD = 'world'
 FRAME_SHIP = 'ship'
 FRAME_AIRCRAFT = 'aircraft'
+
+# the frames the filter node expects on its inputs: topic -> (header.frame_id, child_frame_id or None)
+INPUT_FRAMES: dict[str, tuple[str, str | None]] = {
+    AIRCRAFT_IMU: (FRAME_AIRCRAFT, None),
+    MASTER_ODOM: (FRAME_WORLD, FRAME_SHIP),
+    LDV_TWIST: (FRAME_SHIP, None),
+    DOPPLER_TWIST: (FRAME_AIRCRAFT, None),
+}
 
 
 def msg_class(type_name: str):

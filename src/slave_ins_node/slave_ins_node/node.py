@@ -1,5 +1,6 @@
 """slave_ins_node: the aircraft's strapdown IMU at its deck spot (lever arm, mounting
-misalignment, catapult stroke, sensor errors) and the aircraft truth."""
+misalignment, catapult stroke, sensor errors) and the aircraft truth; when reference_ins.enabled,
+a reference INS solution from that truth (/reference_ins/odom)."""
 from __future__ import annotations
 
 from geometry_msgs.msg import AccelStamped, Vector3Stamped
@@ -7,7 +8,11 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 
 from alignment_core import pipeline
-from alignment_ros import convert, node_util, qos, topics
+from alignment_core.geometry.rotations import quat_to_dcm
+from alignment_core.samples import AircraftTruth
+from alignment_core.sensors.reference_ins import ReferenceInsStage
+from alignment_ros import air_data_convert, convert, node_util, qos, topics
+from alignment_ros.air_data_topics import REFERENCE_INS_ODOM
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 from alignment_ros.stamped_pairs import StampPairer
 
@@ -27,6 +32,11 @@ class SlaveInsNode(node_util.CountingNode):
         self.stream_publisher(Vector3Stamped, topics.TRUTH_MISALIGNMENT)
         self.stream_publisher(Imu, topics.TRUTH_IMU_BIAS)
         self.truth_every = max(1, round(self.sc.rate_hz / TRUTH_RATE_HZ))
+        self.plane = pipeline.plane_of(self.sc)
+        self.reference: ReferenceInsStage | None = None
+        if self.sc.reference_ins.enabled:
+            self.reference = ReferenceInsStage(self.sc.reference_ins, self.sc.seed, self.sc.t0_ns)
+            self.stream_publisher(Odometry, REFERENCE_INS_ODOM)
         self.pairs = StampPairer()
         self.create_subscription(Odometry, topics.SHIP_ODOM, self.on_odom, qos.STREAM)
         self.create_subscription(AccelStamped, topics.SHIP_ACCEL, self.on_accel, qos.STREAM)
@@ -54,6 +64,18 @@ class SlaveInsNode(node_util.CountingNode):
         self.send(topics.TRUTH_AIRCRAFT_ODOM, odom)
         if mis is not None:
             self.send(topics.TRUTH_MISALIGNMENT, mis)
+        if self.reference is not None:
+            self._reference(truth)
+
+    def _reference(self, truth: AircraftTruth) -> None:
+        """The reference INS from the truth as air_data_run feeds it: q_nb body -> local ENU,
+        v_enu = C v_b, lat, lon, h of the world tangent plane position."""
+        assert self.reference is not None
+        lat, lon, h = self.plane.to_geodetic(truth.p_w)
+        s = self.reference.step(truth.t_ns, truth.q_nb, quat_to_dcm(truth.q_nb) @ truth.v_b,
+                                float(lat), float(lon), float(h))
+        if s is not None:
+            self.send(REFERENCE_INS_ODOM, air_data_convert.reference_ins_to_msg(s, self.plane))
 
 
 def main() -> None:

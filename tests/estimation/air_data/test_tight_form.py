@@ -10,30 +10,35 @@ import pytest
 from scipy.spatial.transform import Rotation
 from support.air_data_flight import air_angles_frd, flight
 
+from alignment_core.air_data.atmosphere import Atmosphere, DayOffsets
 from alignment_core.air_data.ports import PortModel
 from alignment_core.estimation.air_data.config import AirDataFilterConfig
 from alignment_core.estimation.air_data.inputs import InsAt
 from alignment_core.estimation.air_data.port_prediction import PortPrediction, StateLayout
 from alignment_core.estimation.air_data.tight_form import TightAirDataFilter
+from alignment_core.estimation.air_data.turbulence_model import TurbulenceModel
 
 
 def test_prediction_is_the_port_model_at_the_true_air_data():
     """h(x) with wind w, offsets s and dT, biases b: the port model at the alpha, beta (textbook
-    FRD formulas), Mach (speed of sound of T_std + dT) and p_inf = p_std (1 + s) of that state."""
+    FRD formulas), Mach (speed of sound of T_std + dT) and p_inf = p_day(h; dT) (1 + s) of that
+    state, p_day the hydrostatic pressure of the warmer day (atmosphere.Atmosphere)."""
     model, lay = PortModel(), StateLayout(5, turbulence=True)
     c_bn = Rotation.from_euler('ZYX', [1.2, -0.2, 0.3]).as_matrix()
     v_g, h = np.array([150.0, 40.0, -5.0]), 8000.0
     x = np.zeros(lay.size)
-    x[lay.wind], x[lay.turb] = (10.0, -4.0, 0.5), (0.7, 0.2, -0.3)
+    x[lay.wind], x[lay.turb] = (10.0, -4.0, 0.5), (0.7, 0.2, -0.3, 0.4, 0.1)
+    turb_map = TurbulenceModel('moderate').at(h, v_g, 150.0)[0]                  # (3, 5): state -> ENU
+    air_mass = np.array([10.0, -4.0, 0.5]) + turb_map @ x[lay.turb]
     x[lay.static], x[lay.temperature] = 0.004, 7.0
     x[lay.bias] = (3.0, -2.0, 1.0, 0.0, 5.0)
     x[lay.noise] = (0.5, 0.0, -1.0, 2.0, 0.0)
-    pred = PortPrediction(model, lay, np.arange(5), InsAt(np.repeat(c_bn[None], 5, 0), np.repeat(v_g[None], 5, 0),
-                                                          np.full(5, h)))(x[None, :])[0]
+    ins = InsAt(np.repeat(c_bn[None], 5, 0), np.repeat(v_g[None], 5, 0), np.full(5, h))
+    pred = PortPrediction(model, lay, np.arange(5), ins, np.repeat(turb_map[None], 5, 0))(x[None, :])[0]
     atm = ambiance.Atmosphere(h)
-    p_inf = float(atm.pressure[0]) * 1.004
+    p_inf = float(Atmosphere(h, DayOffsets(delta_t_k=7.0)).pressure) * 1.004
     a = math.sqrt(1.4 * 287.05287 * (float(atm.temperature[0]) + 7.0))
-    speed, alpha, beta = air_angles_frd(c_bn.T @ (v_g - np.array([10.7, -3.8, 0.2])))
+    speed, alpha, beta = air_angles_frd(c_bn.T @ (v_g - air_mass))
     expected = model.pressures(alpha, beta, speed / a, p_inf) + x[lay.bias] + x[lay.noise]
     np.testing.assert_allclose(pred, expected, rtol=5e-6)     # ambiance's six-digit base pressures
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from alignment_core.air_data.atmosphere import _LAYERS, G0, R_AIR, STANDARD_DAY, _pressure, geopotential_height
+from alignment_core.air_data.atmosphere import _LAYERS, G0, P0, R_AIR, STANDARD_DAY, _pressure, geopotential_height
 
 _BASE_H = np.array([lay[0] for lay in _LAYERS])
 _BASE_T = np.array([lay[1] for lay in _LAYERS])
@@ -40,3 +40,22 @@ def pressure_altitude(p: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         t_graded = t_b * (p / p_b) ** (-R_AIR * np.where(iso, 1.0, b) / G0)
         dh = np.where(iso, -R_AIR * t_b / G0 * np.log(p / p_b), (t_graded - t_b) / np.where(iso, 1.0, b))
     return _BASE_H[k] + dh, np.where(iso, t_b, t_graded)
+
+
+def day_pressure(h: np.ndarray | float, delta_t: np.ndarray | float) -> np.ndarray:
+    """Pressure (Pa) at geometric heights h (m,) on days warmer by delta_t (N,) K with the
+    standard sea-level pressure: p0 exp(-(g0 / R) int_0^H dH' / (T_std(H') + dT)), layer by layer
+    in closed form (atmosphere.py's day); shape (N, m). A sea-level offset dp0 scales it by
+    1 + dp0 / p0 at every height."""
+    H = np.atleast_1d(geopotential_height(h))[None, :]
+    dt = np.atleast_1d(np.asarray(delta_t, dtype=float))[:, None]
+
+    def from_bottom(x: np.ndarray) -> np.ndarray:
+        total = np.zeros(np.broadcast_shapes(x.shape, dt.shape))
+        tops = list(_BASE_H[1:]) + [np.inf]
+        for base, top, t_b, b in zip(_BASE_H, tops, _BASE_T, _LAPSE):
+            seg = np.clip(x, base, top) - base
+            t = t_b + dt
+            total = total + (seg / t if b == 0.0 else np.log1p(b * seg / t) / b)
+        return total
+    return P0 * np.exp(-G0 / R_AIR * (from_bottom(H) - from_bottom(np.zeros((1, 1)))))

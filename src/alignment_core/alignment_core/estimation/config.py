@@ -59,8 +59,32 @@ class FilterConfig:
     doppler_bias_sigma_mps: float = 0.05
     doppler_drift_sigma_arcmin: float = 5.0
     output_rate_hz: float = 10.0
-    gate_chi2: float = 0.0
-    max_gap_factor: float = 1.5
+    # innovation gate: an update whose NIS exceeds it changes nothing (0 = off). On by default as a
+    # gross-outlier gate (1e6: a velocity innovation 1000 sigma off); a statistical threshold (e.g.
+    # chi2_3 at 1 - 1e-9 = 45) would gate the aliased-vibration runs, whose NIS reaches ~1e3-1e4
+    gate_chi2: float = 1e6
+    gate_release_updates: int = 10            # after this many gated updates in a row the next one is taken
+    max_gap_factor: float = 1.5               # an IMU interval longer than this many nominal ones is a gap
+    gap_bridge_factor: float = 5.0            # ... longer than this many: bridged, never one strapdown step
+    gap_error_s: float = 2.0                  # ... longer than this: ERROR until re-converged
+    silence_warn_s: float = 1.0               # master or LDV this far behind the newest stream: WARN
+    # input plausibility (estimation/plausibility.py): beyond these a sample is rejected
+    quaternion_norm_tolerance: float = 1e-3   # master |q| within 1 +- this is normalised, else rejected
+    imu_gyro_range_dps: float = 400.0         # full scale of the slave gyros, per axis
+    imu_accel_range_g: float = 16.0           # ... of the slave accelerometers, per axis
+    master_speed_max_mps: float = 100.0       # ship speed
+    master_rate_max_dps: float = 60.0         # ship body rate
+    position_max_m: float = 1e7               # |position| in the world tangent plane
+    ldv_speed_max_mps: float = 150.0          # aircraft speed relative to the deck
+    doppler_speed_max_mps: float = 400.0      # aircraft ground speed
+    future_stamp_s: float = 1.0               # a sample this far (+ the largest latency) ahead of every other stream
+    launch_felt_fraction: float = 0.5         # an LDV launch needs this fraction of its speed in the IMU's x (0 = off)
+    launch_felt_tolerance_mps: float = 0.2    # ... less this (vibration, deck motion)
+    # consistency monitor (estimation/consistency.py): NIS summed over windows of updates
+    consistency_window_updates: int = 100
+    consistency_warn_p: float = 1e-4          # a window whose NIS sum exceeds chi2(dof) at 1 - p fails: WARN
+    consistency_error_windows: int = 3        # ... this many failing windows in a row: ERROR (persisting)
+    misalignment_max_deg: float = 30.0        # a published misalignment beyond this is absurd (never published)
     heading_on_deck_deg: float = 0.0          # nominal aircraft heading on deck (from the bow, clockwise)
     master_latency_s: float = 0.0             # known latency: /master/odom data are valid at stamp - latency
     ldv_latency_s: float = 0.0                # the same for /ldv/twist
@@ -88,6 +112,7 @@ class FilterConfig:
         require(1 <= self.launch_confirm_samples <= 100,
                 f"launch_confirm_samples must be in [1, 100], got {self.launch_confirm_samples}")
         require(self.max_gap_factor > 1.0, f"max_gap_factor must be > 1, got {self.max_gap_factor}")
+        self.validate_monitoring()
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
                 f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
         for k in ('master_latency_s', 'ldv_latency_s', 'doppler_latency_s'):
@@ -110,6 +135,30 @@ class FilterConfig:
                 f"flexure_sigma_arcmin and flexure_tau_s must be > 0, got {self.flexure_sigma_arcmin}, "
                 f"{self.flexure_tau_s}")
         self.validate_combination()
+
+    def validate_monitoring(self) -> None:
+        """Plausibility limits, gap handling, the gate and the consistency monitor."""
+        require(self.gap_bridge_factor >= self.max_gap_factor,
+                f"gap_bridge_factor must be >= max_gap_factor = {self.max_gap_factor}, got {self.gap_bridge_factor}")
+        for k in ('gap_error_s', 'silence_warn_s', 'imu_gyro_range_dps', 'imu_accel_range_g',
+                  'master_speed_max_mps', 'master_rate_max_dps', 'position_max_m', 'ldv_speed_max_mps',
+                  'doppler_speed_max_mps', 'future_stamp_s', 'misalignment_max_deg'):
+            require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
+        require(0.0 < self.quaternion_norm_tolerance < 0.5,
+                f"quaternion_norm_tolerance must be in (0, 0.5), got {self.quaternion_norm_tolerance}")
+        require(0.0 <= self.launch_felt_fraction <= 1.0,
+                f"launch_felt_fraction must be in [0, 1] (0 = off), got {self.launch_felt_fraction}")
+        require(self.launch_felt_tolerance_mps >= 0.0,
+                f"launch_felt_tolerance_mps must be >= 0, got {self.launch_felt_tolerance_mps}")
+        require(self.gate_release_updates >= 1, f"gate_release_updates must be >= 1, got {self.gate_release_updates}")
+        require(10 <= self.consistency_window_updates <= 100000,
+                f"consistency_window_updates must be in [10, 100000], got {self.consistency_window_updates}")
+        require(0.0 < self.consistency_warn_p < 0.5,
+                f"consistency_warn_p must be in (0, 0.5), got {self.consistency_warn_p}")
+        require(self.consistency_error_windows >= 1,
+                f"consistency_error_windows must be >= 1, got {self.consistency_error_windows}")
+        require(self.misalignment_max_deg <= 180.0,
+                f"misalignment_max_deg must be <= 180, got {self.misalignment_max_deg}")
 
     def validate_combination(self) -> None:
         """Model x algorithm x options (the matrix in docs/engine.md)."""

@@ -4,42 +4,57 @@ the filter algorithm (`filter.algorithm`) are chosen at run time; the default (v
 15-state velocity-matching Kalman filter. Event by event, and why: docs/engine.md."""
 from __future__ import annotations
 
-import dataclasses
 from collections import deque
 from typing import cast
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from alignment_core.estimation import status
+from alignment_core.estimation.anchoring import (
+    bridge_covariance,
+    carried_attitude,
+    dead_reckoned,
+    reset_velocity,
+    slave_from_master,
+)
 from alignment_core.estimation.config import FilterConfig
+from alignment_core.estimation.consistency import NisMonitor
+from alignment_core.estimation.engine_views import EngineViews
 from alignment_core.estimation.filter_factory import make_filter
 from alignment_core.estimation.filters.base import NonlinearFilter
-from alignment_core.estimation.health import BREAKDOWN_ERRORS, finite
+from alignment_core.estimation.health import BREAKDOWN_ERRORS, ERROR, WARN
 from alignment_core.estimation.launch_detection import LaunchDetector, LaunchThresholds
 from alignment_core.estimation.matching import LiveSolution, Matcher, Reference
-from alignment_core.estimation.models import Corrections, Propagation, make_model
+from alignment_core.estimation.models import Propagation, make_model
 from alignment_core.estimation.models.base import DV
-from alignment_core.estimation.outputs import Counters, DeckMotion, Diagnostics, Estimate
+from alignment_core.estimation.outputs import Counters, Estimate
+from alignment_core.estimation.plausibility import InputGate
+from alignment_core.estimation.publication import EstimateMaker, OdometryMaker, PublishGuard, prior_estimate
 from alignment_core.geometry import earth
 from alignment_core.navigation.history import LdvHistory, LdvRecord, SlaveHistory
 from alignment_core.navigation.ordering import StampMerger
-from alignment_core.navigation.strapdown import NavState, Strapdown
 from alignment_core.samples import DopplerSample, ImuSample, LdvSample, MasterSample
+from alignment_core.units import DEG
 
 STREAMS = ('imu', 'ldv', 'master')
 DOPPLER_STREAMS = ('imu', 'ldv', 'doppler', 'master')   # seed001_13: the Doppler radar too
 
 
-class TransferAlignment:
-    """Stamp-ordered transfer-alignment estimator: push samples, call `process`, read `outputs`."""
+class TransferAlignment(EngineViews):
+    """Stamp-ordered transfer-alignment estimator: push samples, call `process`, read `outputs`
+    (the read-only views: engine_views.py)."""
 
     def __init__(self, cfg: FilterConfig, plane: earth.TangentPlane, imu_rate_hz: float) -> None:
         self._cfg = cfg
         self._plane = plane
         self._model = make_model(cfg)
-        self._merger = StampMerger(DOPPLER_STREAMS if self._model.uses_doppler else STREAMS)
+        streams = DOPPLER_STREAMS if self._model.uses_doppler else STREAMS
+        self._merger = StampMerger(streams)
         self._counters = Counters()
+        self._gate = InputGate(cfg, self._counters, streams)
+        self._imu_rate_hz = imu_rate_hz
         self._imu_dt_nominal = 1.0 / imu_rate_hz
+        self._imu_dt_ns = int(round(1e9 / imu_rate_hz))
         self._out_period_ns = int(round(1e9 / cfg.output_rate_hz))
         # time of validity: data valid at stamp - latency
         self._master_lat_ns = int(round(cfg.master_latency_s * 1e9))
@@ -47,127 +62,69 @@ class TransferAlignment:
         self._doppler_lat_ns = int(round(cfg.doppler_latency_s * 1e9))
         self._span_ns = max(self._master_lat_ns, self._ldv_lat_ns, self._doppler_lat_ns) + int(0.2e9)
         self._max_step_ns = int(cfg.max_gap_factor * self._imu_dt_nominal * 1e9)
+        self._bridge_ns = int(cfg.gap_bridge_factor * self._imu_dt_nominal * 1e9)
         self._matcher = Matcher(cfg, self._model, imu_rate_hz, self._span_ns, self._counters)
         self._results = self._matcher.results
         self._track_intervals = self._matcher.tracks_intervals
         self._ldv_history = LdvHistory(self._span_ns, cfg.ldv_sigma_mps)
-        self._imu_buffer: deque[ImuSample] = deque()       # IMU samples before initialisation
+        self._imu_buffer: deque[ImuSample] = deque()       # IMU samples before (re-)anchoring
         self._pending: deque[tuple[int, MasterSample]] = deque()   # (validity time, sample)
         self._t_master: int | None = None          # last master stamp, and the spacing of the last two
         self._master_spacing_ns = 0
         self._launch = LaunchDetector(LaunchThresholds(
             cfg.launch_detect_mps, cfg.launch_confirm_samples, cfg.creep_detect_mps, cfg.creep_window_samples,
-            self._ldv_lat_ns))
+            self._ldv_lat_ns, cfg.launch_felt_fraction, cfg.launch_felt_tolerance_mps))
+        self._t_imu: int | None = None             # the last IMU stamp (the launch detector's intervals)
         # known-event process noise after the launch (velocity states)
         self._launch_ns = int(round(cfg.launch_noise_s * 1e9))
         dv = np.array([k == DV for k in self._model.kinds], dtype=float)
         self._q_launch = np.diag(dv) * cfg.launch_accel_noise_mps2 ** 2 if cfg.launch_accel_noise_mps2 > 0.0 else None
         self._live: LiveSolution | None = None
+        self._anchor_from: int | None = None      # after a gap on the deck: re-anchor at the first master from here
         self._next_out: int | None = None         # the next output at or after this master stamp
         self._deck_disp = np.zeros(3)
         self._last_ldv: LdvSample | None = None
         self._matching = False
-        self._healthy = True
-        self._failure = ''
-        self._held: tuple[np.ndarray, np.ndarray, dict] | None = None   # (attitude cov, sigma, diagnostics)
+        self._health = status.Health()
+        self._monitor = NisMonitor(cfg.consistency_window_updates, cfg.consistency_warn_p,
+                                   cfg.consistency_error_windows, cfg.gate_chi2 if cfg.gate_chi2 > 0.0 else None)
+        self._maker = EstimateMaker(self._model, OdometryMaker(self._model, plane, self._imu_dt_nominal,
+                                                               cfg.arw_dpsh, cfg.gyro_bias_sigma_dph))
+        self._guard = PublishGuard(cfg.misalignment_max_deg * DEG)
         self._outputs: list[Estimate] = []
-
-    # ----- what the engine shows -----
-    @property
-    def outputs(self) -> tuple[Estimate, ...]:
-        """Every estimate so far, one per output instant."""
-        return tuple(self._outputs)
-
-    @property
-    def latest(self) -> Estimate | None:
-        return self._outputs[-1] if self._outputs else None
-
-    @property
-    def counters(self) -> Counters:
-        """A copy of the counters."""
-        return dataclasses.replace(self._counters)
-
-    def diagnostics(self) -> Diagnostics:
-        """The filter's diagnostics as of the last output, health, failure and queued samples."""
-        if self._held is not None:
-            filt = dict(self._held[2])
-        else:
-            filt = {} if self._live is None else self._live.kf.diagnostics()
-        return Diagnostics(filt, self._healthy, self._failure, self._merger.pending())
-
-    @property
-    def solution(self) -> NavState | None:
-        """A copy of the live slave solution (None before initialisation)."""
-        if self._live is None:
-            return None
-        st = self._live.ins.s
-        return dataclasses.replace(st, q_nb=st.q_nb.copy(), v_n=st.v_n.copy(), prev_dtheta=st.prev_dtheta.copy(),
-                                   prev_dv=st.prev_dv.copy())
-
-    @property
-    def corrections(self) -> Corrections:
-        """A copy of what feedback accumulated outside the strapdown (sensor biases, lever arm)."""
-        c = self._results.corr
-        return Corrections(bg=c.bg.copy(), ba=c.ba.copy(), dr=c.dr.copy(), mu=c.mu.copy())
-
-    @property
-    def deck_motion(self) -> DeckMotion:
-        d = self._launch
-        return DeckMotion(d.moving, d.t_moving_ns, d.t_launch_ns, self._deck_disp.copy())
-
-    @property
-    def labels(self) -> tuple[str, ...]:
-        return self._model.labels
-
-    @property
-    def n_states(self) -> int:
-        return self._model.n
-
-    @property
-    def model_name(self) -> str:
-        return self._model.name
-
-    @property
-    def uses_doppler(self) -> bool:
-        return self._model.uses_doppler
-
-    @property
-    def healthy(self) -> bool:
-        return self._healthy
-
-    @property
-    def failure(self) -> str:
-        """Why the filter stopped ('' while healthy)."""
-        return self._failure
+        self._published: list[Estimate] = []
 
     # ----- input -----
     def push_imu(self, s: ImuSample) -> bool:
-        return self._push('imu', s.t_ns, s, s.gyro, s.accel)
+        return self._push('imu', s)
 
     def push_ldv(self, s: LdvSample) -> bool:
-        return self._push('ldv', s.t_ns, s, s.v_s if s.valid else np.zeros(3))
+        return self._push('ldv', s)
 
     def push_master(self, s: MasterSample) -> bool:
-        return self._push('master', s.t_ns, s, s.p_w, s.q_nb, s.v_b, s.w_b)
+        return self._push('master', s)
 
     def push_doppler(self, s: DopplerSample) -> bool:
         """A Doppler radar sample (only models that use it take this stream; others ignore it)."""
         if not self._model.uses_doppler:
             return True
-        return self._push('doppler', s.t_ns, s, s.v_b if s.valid else np.zeros(3), np.array([s.sigma]))
+        return self._push('doppler', s)
 
-    def _push(self, stream: str, t_ns: int, item: object, *arrays: np.ndarray) -> bool:
-        """Queue a sample unless it is non-finite or not after its stream's previous stamp."""
-        if not finite(*arrays):
-            self._counters.rejected_nonfinite += 1
+    def _push(self, stream: str, s) -> bool:
+        """Queue a sample unless it is implausible (plausibility.py) or not after its stream's
+        previous stamp; a rejection is counted by reason (`last_rejection`)."""
+        item = self._gate.check(stream, s)
+        if item is None:
             return False
-        if not self._merger.push(stream, t_ns, item):
-            self._counters.rejected_out_of_order += 1
+        if not self._merger.push(stream, s.t_ns, item):
+            self._gate.reject_out_of_order()
             return False
+        self._gate.accepted(stream, s.t_ns)
         return True
 
     def process(self, final: bool = False) -> list[Estimate]:
-        """Run every event up to the watermark (all of them if final); return the new outputs."""
+        """Run every event up to the watermark (all of them if final); return the new outputs as
+        published (`published`: the same as `outputs` while the estimates are good)."""
         n0 = len(self._outputs)
         events = self._merger.flush() if final else self._merger.pop_ready()
         for stream, t, item in events:
@@ -183,33 +140,55 @@ class TransferAlignment:
             for h in self._launch.release():         # an unconfirmed run at the end: parked
                 self._record_ldv(h)
             self._match_pending(final=True)
-        return self._outputs[n0:]
+        new = [self._guard.publish(e, self._prior) for e in self._outputs[n0:]]
+        self._published.extend(new)
+        return new
+
+    def _prior(self, e: Estimate) -> Estimate:
+        p0 = self._model.initial_covariance()
+        return prior_estimate(e, np.full(3, self._cfg.init_attitude_sigma_deg * DEG), p0, self._model.attitude)
 
     def _fail(self, why: str) -> None:
         """Stop filtering after a breakdown: keep the last good estimate (published with
         healthy=False) and let the slave run free inertial."""
         self._counters.numerical_failures += 1
-        if self._healthy:
-            self._healthy = False
-            self._failure = why
+        if self._health.running:
+            self._health.running = False
+            self._health.failure = why
             self._matching = False
 
     # ----- events -----
     def _on_imu(self, t: int, s: ImuSample) -> None:
         self._counters.imu += 1
+        if self._launch.t_launch_ns is None:            # the launch detector feels the stroke
+            h = self._imu_dt_nominal if self._t_imu is None else (t - self._t_imu) * 1e-9
+            self._launch.observe_imu(t, float(s.accel[0]), h)
+        self._t_imu = t
         live = self._live
-        if live is None:
-            self._imu_buffer.append(s)
-            while self._imu_buffer and self._imu_buffer[0].t_ns < t - self._span_ns:
-                self._imu_buffer.popleft()
-                self._counters.skipped_before_init += 1
+        if live is None or self._anchor_from is not None:
+            self._buffer_imu(t, s)
+            if live is not None:
+                self._match_pending()
             return
         if t <= live.t_ns:
             self._counters.skipped_before_init += 1
             return
+        if t - live.t_ns > self._bridge_ns:
+            self._bridge(live, t)
+            if self._anchor_from is not None:
+                self._buffer_imu(t, s)
+                self._match_pending()
+                return
         self._propagate(live, t, s)
         if self._pending:
             self._match_pending()
+
+    def _buffer_imu(self, t: int, s: ImuSample) -> None:
+        """Keep the IMU sample for the (re-)anchoring master; drop those older than the span."""
+        self._imu_buffer.append(s)
+        while self._imu_buffer and self._imu_buffer[0].t_ns < t - self._span_ns:
+            self._imu_buffer.popleft()
+            self._counters.skipped_before_init += 1
 
     def _propagate(self, live: LiveSolution, t: int, s: ImuSample) -> None:
         """The strapdown over the IMU interval ending at t, then the filter's predict."""
@@ -227,10 +206,11 @@ class TransferAlignment:
         if self._track_intervals:
             self._matcher.record_interval(t, h, s.gyro, st.v_n - v_start)
         live.t_ns = t
+        live.gyro = s.gyro
         live.history.prune(t - self._span_ns, t)
-        if not self._healthy:
+        if not self._health.running:
             return
-        p = Propagation(ins.c_start, f_n, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
+        p = live.prop = Propagation(ins.c_start, f_n, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
         qd = self._model.process_noise(h)
         t_launch = self._launch.t_launch_ns
         if self._q_launch is not None and t_launch is not None and t - t_launch <= self._launch_ns \
@@ -247,6 +227,33 @@ class TransferAlignment:
         except (np.linalg.LinAlgError, FloatingPointError, ValueError) as e:
             self._fail(f'predict: {e}')
 
+    def _bridge(self, live: LiveSolution, t: int) -> None:
+        """An IMU gap longer than gap_bridge_factor intervals is never one strapdown step: the
+        filter's covariance is propagated over the time without data, the solution flagged 'gap'
+        (ERROR beyond gap_error_s) until a NIS window after it passes. Parked on the deck, the
+        slave is then carried across by the master (anchoring.py) at the first master sample
+        from the next sample's interval on; moving, it dead-reckons across at its velocity."""
+        start = t - self._imu_dt_ns                   # the next sample covers (start, t]
+        gap = max(start - live.t_ns, 0) * 1e-9
+        self._counters.imu_gaps += 1
+        self._counters.bridged_gaps += 1
+        hl = self._health
+        hl.gap_level = max(hl.gap_level, ERROR if gap > self._cfg.gap_error_s else WARN)
+        hl.gap_s, hl.recover_mark = gap, self._monitor.completed
+        self._monitor.restart()
+        self._matcher.restart(self._imu_rate_hz)
+        if hl.running:
+            try:
+                bridge_covariance(live.kf, self._model, live.prop, gap)
+            except BREAKDOWN_ERRORS as e:
+                self._fail(f'predict: {e}')
+        live.history = SlaveHistory(self._span_ns)
+        if not self._launch.moving and hl.running:
+            self._anchor_from = start
+            return
+        live.ins.s = dead_reckoned(live.ins.s, gap)
+        live.t_ns = start
+
     def _on_ldv(self, t: int, s: LdvSample) -> None:
         """The launch detector decides which samples to record now (none while it holds a fast
         run back: the master matches wait); a launch it confirms puts the launch noise of the IMU
@@ -257,6 +264,8 @@ class TransferAlignment:
             self._late_launch_noise(decision.launch_ns)
         if decision.creep:
             self._counters.creep_detected += 1
+        if decision.not_felt:
+            self._counters.launch_not_felt += 1
         if not decision.record:
             return
         for r in decision.record:
@@ -267,7 +276,7 @@ class TransferAlignment:
     def _late_launch_noise(self, t_v: int) -> None:
         """The launch noise (velocity states) of the IMU steps between the launch at t_v and now."""
         live = self._live
-        if self._q_launch is not None and live is not None and self._healthy and live.t_ns > t_v:
+        if self._q_launch is not None and live is not None and self._health.running and live.t_ns > t_v:
             late = min(live.t_ns - t_v, self._launch_ns) * 1e-9
             live.kf.P = live.kf.P + self._q_launch * late
 
@@ -285,9 +294,10 @@ class TransferAlignment:
         """Match the radar at its validity time (it is ordered after the IMU sample at t)."""
         self._counters.doppler += 1
         live = self._live
-        if live is None or not s.valid or not self._healthy:
+        if live is None or not s.valid or not self._health.running:
             return
-        past = live.history.state_at(t - self._doppler_lat_ns, live.ins.s, live.t_ns, self._max_step_ns)
+        past = None if self._anchor_from is not None else live.history.state_at(
+            t - self._doppler_lat_ns, live.ins.s, live.t_ns, self._max_step_ns)
         if past is None:
             self._counters.unmatched_doppler += 1
             return
@@ -295,6 +305,16 @@ class TransferAlignment:
             self._matcher.update_doppler(live, t, s, past)
         except BREAKDOWN_ERRORS as e:
             self._fail(f'update: {e}')
+            return
+        self._monitor_update()
+
+    def _monitor_update(self) -> None:
+        """The last update's NIS into the consistency monitor."""
+        res = self._monitor.add(self._results.nis, self._results.dof)
+        if res is not None:
+            if res.failed:
+                self._counters.consistency_failures += 1
+            self._health.window_done(self._monitor, res.failed)
 
     def _on_master(self, t: int, m: MasterSample) -> None:
         """Queue the sample at its validity time; match it once the slave and the LDV have
@@ -314,24 +334,32 @@ class TransferAlignment:
     def _match_pending(self, final: bool = False) -> None:
         while self._pending:
             t_v, m = self._pending[0]
+            anchor_from = self._anchor_from
+            anchoring = anchor_from is not None
+            if anchor_from is not None and t_v < anchor_from:      # inside the gap: no slave solution there
+                self._pending.popleft()
+                self._counters.unmatched_master += 1
+                continue
             if not final:
                 latest = self._ldv_history.latest_ns
-                if latest is None or latest < t_v or (self._live is not None and self._live.t_ns < t_v):
+                if latest is None or latest < t_v or (
+                        self._live is not None and not anchoring and self._live.t_ns < t_v):
                     return
             self._pending.popleft()
             self._match(t_v, m)
 
     def _match(self, t_v: int, m: MasterSample) -> None:
         """The master sample valid at t_v against the LDV and the slave solution at t_v (the
-        first one initialises the slave)."""
+        first one initialises the slave, the first after a gap on the deck re-anchors it)."""
         ldv = self._ldv_history.at(t_v)
-        ref = self._matcher.reference(m, ldv, self._deck_disp)
         live = self._live
-        if live is None:
-            self._initialise(t_v, m, ref)
+        reanchor = live is not None and self._anchor_from is not None
+        ref = self._matcher.reference(m, ldv, self._deck_disp, surveyed=reanchor)
+        if live is None or reanchor:
+            self._anchor(t_v, m, ref)
             return
-        if ldv is None or not ldv.valid or not self._healthy:
-            self._matching = self._healthy and self._results.t_doppler_update == m.t_ns
+        if ldv is None or not ldv.valid or not self._health.running:
+            self._matching = self._health.running and self._results.t_doppler_update == m.t_ns
             return
         past = live.history.state_at(t_v, live.ins.s, live.t_ns, self._max_step_ns)
         if past is None:
@@ -346,18 +374,27 @@ class TransferAlignment:
             self._fail(f'update: {e}')
             return
         self._matching = True
+        self._monitor_update()
 
-    def _initialise(self, t_v: int, m: MasterSample, ref: Reference) -> None:
-        """Slave = master attitude (times the nominal mounting), velocity and position at the lever
-        arm, at the master's validity time; IMU samples already received after it are replayed."""
-        c_m = ref.c_m
-        lat, lon, h = self._plane.to_geodetic(m.p_w + self._plane.c_local_to_world(m.p_w) @ (c_m @ ref.r))
-        c_nom = self._matcher.c_nom
-        c_a = c_m if c_nom is None else c_m @ c_nom
-        q = Rotation.from_matrix(c_a).as_quat()
-        ins = Strapdown(NavState(q_nb=q, v_n=ref.v_ref.copy(), lat=float(lat), lon=float(lon), h=float(h)))
-        kf = make_filter(self._cfg, np.zeros(self._model.n), self._model.initial_covariance(), self._model.kinds)
-        live = self._live = LiveSolution(ins, kf, t_v, SlaveHistory(self._span_ns))
+    def _anchor(self, t_v: int, m: MasterSample, ref: Reference) -> None:
+        """Slave = master attitude times the nominal mounting (initialisation) or times the relative
+        attitude of the last match (after a gap), velocity and position at the lever arm, at the
+        master's validity time; the filter starts from the prior, or keeps its covariance with the
+        velocity errors reset to the reference's. IMU samples received after t_v are replayed."""
+        reanchor = self._live is not None
+        c_a = carried_attitude(ref.c_m, self._results.anchor if reanchor else None, self._matcher.c_nom)
+        ins = slave_from_master(self._plane, m, ref, c_a)
+        if self._live is None:
+            kf = make_filter(self._cfg, np.zeros(self._model.n), self._model.initial_covariance(), self._model.kinds)
+            self._live = LiveSolution(ins, kf, t_v, SlaveHistory(self._span_ns))
+        else:
+            self._live.ins, self._live.t_ns, self._live.history = ins, t_v, SlaveHistory(self._span_ns)
+            self._anchor_from = None
+            if self._health.running:
+                cfg = self._cfg
+                reset_velocity(self._live.kf, self._model, cfg.parked_velocity_sigma_mps ** 2
+                               + cfg.master_velocity_sigma_mps ** 2)
+        live = self._live
         buffered, self._imu_buffer = self._imu_buffer, deque()
         for s in buffered:
             if s.t_ns > live.t_ns:
@@ -367,29 +404,9 @@ class TransferAlignment:
 
     def _emit(self, t: int, live: LiveSolution) -> None:
         """One output at master stamp t; after a breakdown, the last good one with healthy=False."""
-        res = self._results
-        fading: float | np.ndarray = 1.0
-        if self._healthy:
-            diag = live.kf.diagnostics()
-            fading = diag.get('fading', 1.0)
-            att = self._model.attitude
-            p = live.kf.P
-            cov, sigma = p[att, att].copy(), np.sqrt(np.diag(p))
-            if not (finite(cov, sigma) and finite(res.mu, res.mu_sigma)):
-                self._fail('covariance not finite at the output')
-            else:
-                self._held = (cov, sigma, diag)
-        if not self._healthy:
-            if self._held is None:
-                att = self._model.attitude
-                p0 = self._model.initial_covariance()
-                self._held = (p0[att, att].copy(), np.sqrt(np.diag(p0)), {})
-            cov, sigma, diag = self._held
-            fading = diag.get('fading', 1.0)
-        corr = res.corr
-        self._outputs.append(Estimate(
-            t_ns=t, misalignment=res.mu.copy(), misalignment_sigma=res.mu_sigma.copy(),
-            q_nb=live.ins.s.q_nb.copy(), attitude_cov=cov, x=res.x.copy(),
-            sigma=sigma, bias_gyro=corr.bg.copy(), bias_accel=corr.ba.copy(),
-            nis=res.nis, updates=self._counters.updates, matching=self._matching, fading=fading,
-            healthy=self._healthy))
+        if self._health.running and not self._maker.keep(live, self._results):
+            self._fail('covariance not finite at the output')
+        level, flags = status.with_lag(*status.level_and_flags(self._health, self._monitor), t - live.t_ns,
+                                       self._bridge_ns, int(self._cfg.gap_error_s * 1e9))
+        self._outputs.append(self._maker.make(t, live, self._results, self._counters.updates, self._matching,
+                                              level, flags))

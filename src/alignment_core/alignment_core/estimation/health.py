@@ -1,10 +1,14 @@
 """Numerical health of the engine's filter: finiteness checks cheap enough for every sample and
-update, and the errors that count as a breakdown (docs/engine.md, numerical breakdown)."""
+update, the errors that count as a breakdown (docs/engine.md, numerical breakdown), and the
+levels the engine reports its state with (those of diagnostic_msgs/DiagnosticStatus)."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
+
+OK, WARN, ERROR = 0, 1, 2          # DiagnosticStatus.OK / WARN / ERROR
+LEVEL_NAMES = ('OK', 'WARN', 'ERROR')
 
 _reduce = np.add.reduce
 _min = np.minimum.reduce

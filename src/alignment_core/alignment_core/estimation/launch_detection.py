@@ -1,6 +1,7 @@
-"""When the aircraft starts to move on the deck, from the LDV alone: the launch (a confirmed run of
-fast samples) and slow creep before it (a median over a window). The engine consults it once per
-LDV sample and applies what it decides (docs/engine.md, launch detection)."""
+"""When the aircraft starts to move on the deck: the launch (a confirmed run of fast LDV samples
+that the accelerometers felt) and slow creep before it (a median of the LDV over a window). The
+engine consults it once per LDV sample, feeds it the IMU's specific force along x until the
+launch, and applies what it decides (docs/engine.md, launch detection)."""
 from __future__ import annotations
 
 from collections import deque
@@ -19,6 +20,7 @@ class LdvDecision:
     record: tuple[LdvSample, ...] = ()
     launch_ns: int | None = None
     creep: bool = False
+    not_felt: bool = False            # a run of fast samples the accelerometers did not feel: no launch
 
 
 @dataclass(frozen=True)
@@ -29,6 +31,13 @@ class LaunchThresholds:
     creep_mps: float                  # 0: no creep detection
     creep_window: int
     ldv_latency_ns: int = 0
+    felt_fraction: float = 0.0        # the IMU's velocity change along x must reach this fraction of
+    felt_tolerance_mps: float = 0.2   # the run's speed, less this (0 fraction: LDV alone decides)
+
+
+FELT_MARGIN_NS = 100_000_000          # the IMU's velocity change is summed from 0.1 s before the run
+FELT_BASE_NS = 1_000_000_000          # against the mean specific force over the second before that
+FELT_SPAN_NS = 4_000_000_000          # IMU intervals kept for the check
 
 
 class LaunchDetector:
@@ -48,6 +57,8 @@ class LaunchDetector:
         self._fast_run: list[int] = []         # stamps of fast samples in a row while creeping
         self._recent: deque[np.ndarray] = deque(maxlen=max(limits.creep_window, 1))
         self._recent_sum = np.zeros(3)         # running sum of _recent (a cheap trigger for the median)
+        self._imu: deque[tuple[int, float, float]] = deque()   # (t_end, specific force along x, h)
+        self.felt_margin_mps = np.inf          # the last check's velocity change minus what it needed
 
     @property
     def moving(self) -> bool:
@@ -60,6 +71,41 @@ class LaunchDetector:
     @property
     def t_launch_ns(self) -> int | None:
         return self._t_launch
+
+    def observe_imu(self, t_ns: int, f_x: float, h: float) -> None:
+        """One IMU interval ending at t_ns: mean specific force along the aircraft x axis, length h s."""
+        if self.limits.felt_fraction <= 0.0:
+            return
+        q = self._imu
+        q.append((t_ns, f_x, h))
+        while q[0][0] < t_ns - FELT_SPAN_NS:
+            q.popleft()
+
+    def _felt(self, t_v: int, speed: float) -> bool:
+        """Did the accelerometers feel a run that started at validity time t_v and reached `speed`
+        (relative to the motion before it)? The velocity change along x summed from FELT_MARGIN
+        before t_v, less the mean specific force of the second before that (gravity on the pitched
+        deck, the deck's own acceleration), must reach felt_fraction speed - felt_tolerance. A run
+        the IMU cannot have seen yet (no intervals) is not held against the LDV."""
+        lim = self.limits
+        need = lim.felt_fraction * speed - lim.felt_tolerance_mps
+        if lim.felt_fraction <= 0.0 or need <= 0.0 or not self._imu:
+            return True
+        split = t_v - FELT_MARGIN_NS
+        base_f = base_h = dv = h_sum = 0.0
+        for t, f, h in self._imu:
+            if t <= split:
+                if t > split - FELT_BASE_NS:
+                    base_f += f * h
+                    base_h += h
+            else:
+                dv += f * h
+                h_sum += h
+        if h_sum == 0.0:
+            return True
+        base = base_f / base_h if base_h > 0.0 else 0.0
+        self.felt_margin_mps = dv - base * h_sum - need
+        return self.felt_margin_mps >= 0.0
 
     def observe(self, s: LdvSample) -> LdvDecision:
         """The decision for the next LDV sample (stamp order)."""
@@ -74,10 +120,15 @@ class LaunchDetector:
             self._recent_sum += s.v_s
         launch = None
         if self._moving and self._t_launch is None:     # creeping: watch for the stroke
-            if s.valid and speed > lim.launch_mps + self._median_speed():
+            median = self._median_speed()
+            if s.valid and speed > lim.launch_mps + median:
                 self._fast_run.append(s.t_ns)
                 if len(self._fast_run) >= lim.confirm_samples:
-                    launch = self._launch(self._fast_run[0] - lim.ldv_latency_ns)
+                    t_v = self._fast_run[0] - lim.ldv_latency_ns
+                    if not self._felt(t_v, speed - median):
+                        self._fast_run.clear()
+                        return LdvDecision((s,), None, False, True)
+                    launch = self._launch(t_v)
             elif s.valid:
                 self._fast_run.clear()
         if self._moving:
@@ -88,7 +139,11 @@ class LaunchDetector:
             self._held_fast += fast
             if self._held_fast < lim.confirm_samples:
                 return LdvDecision()
-            launch = self._launch(self._held[0].t_ns - lim.ldv_latency_ns)
+            t_v = self._held[0].t_ns - lim.ldv_latency_ns
+            top = max(float(np.sqrt(h.v_s @ h.v_s)) for h in self._held if h.valid)
+            if not self._felt(t_v, top):
+                return LdvDecision(self.release(), None, False, True)   # recorded as parked
+            launch = self._launch(t_v)
         elif self._creeping():
             self._moving = True
             self._t_moving = s.t_ns - lim.ldv_latency_ns

@@ -16,7 +16,7 @@ from alignment_core.estimation.filter_factory import EngineFilter
 from alignment_core.estimation.filters.base import NonlinearFilter, solve
 from alignment_core.estimation.filters.lowpass import ButterworthLowPass
 from alignment_core.estimation.health import check_health
-from alignment_core.estimation.models import Corrections, ErrorModel, Match, Measurement
+from alignment_core.estimation.models import Corrections, ErrorModel, Match, Measurement, Propagation
 from alignment_core.estimation.models.base import RateInputs
 from alignment_core.estimation.outputs import Counters
 from alignment_core.geometry.rotations import cross3, quat_conj, quat_mul, quat_to_dcm
@@ -42,6 +42,8 @@ class LiveSolution:
     kf: EngineFilter
     t_ns: int
     history: SlaveHistory
+    prop: Propagation | None = None         # the last IMU step as the model saw it (gap bridging)
+    gyro: np.ndarray | None = None          # the last raw gyro rate (the published body rate)
 
 
 class Reference(NamedTuple):
@@ -58,13 +60,18 @@ class Reference(NamedTuple):
 class MatchResults:
     """What the matches leave: the published misalignment and its 1-sigma (rad, aircraft axes),
     the last a-posteriori state before feedback, the last NIS, the stamp of the last accepted
-    Doppler update, and the corrections fed back outside the strapdown (sensor biases, lever arm)."""
+    Doppler update, and the corrections fed back outside the strapdown (sensor biases, lever arm);
+    the rows of the last update (its NIS's degrees of freedom) and, from the last accepted master
+    update, the master attitude and the corrected slave attitude at its validity time (the
+    relative attitude a bridged gap carries the slave across with)."""
     mu: np.ndarray
     mu_sigma: np.ndarray
     x: np.ndarray
     nis: float = math.nan
     t_doppler_update: int | None = None
     corr: Corrections = field(default_factory=Corrections)
+    dof: int = 0
+    anchor: tuple[np.ndarray, np.ndarray] | None = None    # (C_m (3, 3), slave q_nb (4,))
 
 
 class Matcher:
@@ -87,6 +94,7 @@ class Matcher:
         self._r_moving = np.eye(3) * (cfg.ldv_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
         self._r_parked = np.eye(3) * (cfg.parked_velocity_sigma_mps**2 + cfg.master_velocity_sigma_mps**2)
         self._gate = cfg.gate_chi2 if cfg.gate_chi2 > 0.0 else None
+        self._gated_in_row = 0               # a run this long means the state, not the data, is off
         self._doppler_lat_ns = int(round(cfg.doppler_latency_s * 1e9))
         psi = cfg.heading_on_deck_deg * DEG
         # nominal mounting on the deck: C_a^s = Rz(-heading on deck) (None: the identity)
@@ -99,15 +107,46 @@ class Matcher:
         self.results = MatchResults(mu=np.zeros(3), mu_sigma=np.full(3, cfg.init_attitude_sigma_deg * DEG),
                                     x=np.zeros(model.n))
 
+    def restart(self, imu_rate_hz: float) -> None:
+        """Forget what ties the matches to the slave's past (after a bridged IMU gap): the low-pass
+        filter's state, the IMU intervals and the previous master sample, the gated run."""
+        if self._lowpass is not None:
+            self._lowpass = ButterworthLowPass(self._cfg.butterworth_cutoff_hz, imu_rate_hz)
+        self._intervals.clear()
+        self._prev_master = None
+        self._gated_in_row = 0
+
+    def _gate_now(self) -> float | None:
+        """The gate for the next update: none once gate_release_updates updates in a row were gated
+        (a filter that rejects all its data has a wrong state; the consistency monitor sees it)."""
+        if self._gate is not None and self._gated_in_row >= self._cfg.gate_release_updates:
+            return None
+        return self._gate
+
+    def _gated(self, accepted: bool, gate: float | None) -> bool:
+        """Count the update's outcome; True if it was gated."""
+        if accepted:
+            if gate is None and self._gated_in_row:
+                self._counters.gate_released += 1
+            self._gated_in_row = 0
+            return False
+        self._gated_in_row += 1
+        self._counters.gated += 1
+        return True
+
     def record_interval(self, t_ns: int, h: float, gyro: np.ndarray, dv_n: np.ndarray) -> None:
         """An IMU interval ending at t_ns (length h s, raw gyro rate, nav-frame velocity change)."""
         self._intervals.append((t_ns, h, gyro, dv_n))
 
-    def reference(self, m: MasterSample, ldv: LdvRecord | None, deck_disp: np.ndarray) -> Reference:
-        """The reference for the slave from master sample m and the LDV at its validity time."""
+    def reference(self, m: MasterSample, ldv: LdvRecord | None, deck_disp: np.ndarray,
+                  surveyed: bool = False) -> Reference:
+        """The reference for the slave from master sample m and the LDV at its validity time;
+        `surveyed`: with the surveyed lever arm whatever the treatment (where the slave is, to
+        place it there after a gap), else the one the matches use."""
         c_m = quat_to_dcm(m.q_nb)
         moving = ldv is not None and ldv.moving
-        r = self._lever_arm(ldv.disp if ldv is not None else deck_disp)
+        disp = ldv.disp if ldv is not None else deck_disp
+        r = self._r0 + self.results.corr.dr + disp if surveyed else self._lever_arm(disp)
         v_rel = ldv.v_s if (ldv is not None and ldv.valid and moving) else np.zeros(3)
         u_n = c_m @ (cross3(m.w_b, r) + v_rel)
         return Reference(c_m, r, v_rel, u_n, c_m @ m.v_b + u_n, moving)
@@ -182,16 +221,17 @@ class Matcher:
         res = self.results
         meas = self._model.measurement(match, res.corr)
         kf = live.kf
+        gate = self._gate_now()
+        res.dof = len(meas.z)
         if meas.h is None:
             assert meas.hfun is not None
-            upd = cast(NonlinearFilter, kf).update_nonlinear(meas.z, meas.hfun, meas.r, self._gate)
+            upd = cast(NonlinearFilter, kf).update_nonlinear(meas.z, meas.hfun, meas.r, gate)
         else:
             h = meas.h if phi_acc is None else solve(phi_acc.T, meas.h.T).T
-            upd = kf.update(meas.z, h, meas.r, self._gate)
+            upd = kf.update(meas.z, h, meas.r, gate)
         check_health(kf.x, kf.P)
         res.nis = upd.nis
-        if not upd.accepted:
-            self._counters.gated += 1
+        if self._gated(upd.accepted, gate):
             return
         self._counters.updates += 1
         x = kf.x
@@ -201,6 +241,7 @@ class Matcher:
         live.history.prune(min(t_v, live.t_ns - self._doppler_lat_ns), live.t_ns)
         x_new, nav = self._feed_back(live, x, p, match, nav)
         kf.x = x_new
+        res.anchor = (ref.c_m, nav.q_nb)
         res.mu, res.mu_sigma = self._model.misalignment(x_new, p, match, nav, res.corr)
 
     def update_doppler(self, live: LiveSolution, t: int, s: DopplerSample, past: Past) -> None:
@@ -213,12 +254,13 @@ class Matcher:
         assert meas.h is not None
         h = meas.h if phi_acc is None else solve(phi_acc.T, meas.h.T).T
         kf = live.kf
-        upd = kf.update(meas.z, h, meas.r, self._gate)
+        gate = self._gate_now()
+        upd = kf.update(meas.z, h, meas.r, gate)
         check_health(kf.x, kf.P)
         res = self.results
         res.nis = upd.nis
-        if not upd.accepted:
-            self._counters.gated += 1
+        res.dof = len(meas.z)
+        if self._gated(upd.accepted, gate):
             return
         self._counters.doppler_updates += 1
         x = kf.x

@@ -2,7 +2,7 @@
 diagnostics and what it knows of the aircraft's motion on the deck (docs/engine.md)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -24,7 +24,15 @@ class Estimate:
     updates: int
     matching: bool
     fading: float | np.ndarray = 1.0  # last fading factor(s) of a fading / strong tracking filter
-    healthy: bool = True              # False after a numerical breakdown: the last good estimate, held
+    healthy: bool = True              # False at level ERROR (breakdown, long gap, inconsistent)
+    level: int = 0                    # health.OK / WARN / ERROR at this output
+    flags: tuple[str, ...] = ()       # why not OK: 'gap', 'inconsistent', 'breakdown', 'held', ...
+    # the slave INS solution after the filter's corrections (/alignment/odom); None: not computed
+    p_w: np.ndarray | None = None     # (3,) position, world tangent plane (ENU), m
+    v_b: np.ndarray | None = None     # (3,) velocity w.r.t. the Earth in body axes (FLU), m/s
+    w_b: np.ndarray | None = None     # (3,) body rate w.r.t. the nav frame, body axes, rad/s
+    pose_cov: np.ndarray | None = None    # (6, 6) position (m^2), then attitude (rotation vector, rad^2); -1: unknown
+    twist_cov: np.ndarray | None = None   # (6, 6) body velocity (m^2/s^2), then body rate ((rad/s)^2); -1: unknown
 
 
 @dataclass
@@ -46,6 +54,14 @@ class Counters:
     numerical_failures: int = 0       # breakdowns of the filter (non-finite or non-PD covariance)
     creep_detected: int = 0           # slow deck motion seen before the launch (LDV in the reference from then)
     rate_unmatched: int = 0           # rate matching: matches without a gyro interval / master pair to compare
+    rejected_quaternion: int = 0      # master quaternion off unit norm by more than the tolerance
+    rejected_range: int = 0           # a value beyond the sensor's or the vehicle's range
+    rejected_future_stamp: int = 0    # a stamp far ahead of every other stream
+    quaternion_normalised: int = 0    # master quaternions normalised (off unit norm within the tolerance)
+    launch_not_felt: int = 0          # LDV runs the accelerometers did not feel: not a launch
+    bridged_gaps: int = 0             # IMU gaps bridged (longer than gap_bridge_factor intervals)
+    gate_released: int = 0            # updates taken after gate_release_updates gated ones in a row
+    consistency_failures: int = 0     # NIS windows above their chi-square bound
 
 
 @dataclass(frozen=True)
@@ -57,6 +73,11 @@ class Diagnostics:
     healthy: bool
     failure: str                      # '' while healthy
     pending: int
+    level: int = 0                    # health.OK / WARN / ERROR now (the outputs' and the inputs')
+    flags: tuple[str, ...] = ()       # what made it WARN or ERROR
+    message: str = ''                 # one line for /diagnostics
+    silent: tuple[str, ...] = ()      # streams that fell silent (arrival stamps)
+    consistency: dict[str, Any] = field(default_factory=dict)   # the NIS monitor's last window
 
 
 @dataclass(frozen=True)

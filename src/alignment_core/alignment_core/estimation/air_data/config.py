@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from alignment_core.air_data.turbulence_spec import SEVERITIES
 from alignment_core.validation import require
 
 FORMS = ('paper', 'tight')
@@ -23,11 +24,14 @@ class AirDataFilterConfig:
     ports' Gauss-Markov noise, `port_white_sigma_pa` an independent floor (quantisation),
     `lag_s_sea_level` the pneumatic lag tau = tau0 p0 / p the filter compensates.
     Tight form: wind random walk (`wind_walk_mps_per_sqrt_s`, initial `wind_sigma_mps`);
-    turbulence first-order Gauss-Markov of `turbulence_sigma_mps` and correlation length
-    `turbulence_length_m` (time constant L / V); static-pressure ratio offset (p_inf =
-    p_std(h_ins) (1 + s)) and temperature offset, each with initial sigma and random walk; port
-    biases (initial sigma, constant). Fault detection: a port whose normalised innovations
-    squared average above `fault_threshold` over `fault_window_s` is excluded from then on.
+    turbulence of `turbulence_severity` (none: no turbulence states): first-order Gauss-Markov
+    per ENU axis with the MIL-F-8785C intensity and scale length at the INS height (horizontal:
+    sigma_u, L_u; up: sigma_w, L_w; time constant L / V); temperature offset dT and
+    static-pressure ratio offset s (p_inf = p_day(h_ins; dT) (1 + s): the hydrostatic pressure of
+    the warmer day, scaled by the day's sea-level pressure and the INS height error), each with
+    initial sigma and random walk; port biases (initial sigma, constant). Fault detection: a
+    port whose normalised innovations squared, summed over `fault_window_s` (at least 5 frames),
+    exceed the chi-square quantile of probability 1 - `fault_false_alarm` is excluded from then on.
     Paper form: white specific-force and rate noise (the seed's 3-sigma 0.06 m/s^2 and
     0.03 deg/s: 1-sigma 0.02 and 0.01); `paper_branch` uses the seed's alpha > 45 deg test;
     the INS attitude error (its covariance comes with each INS solution) tilts gravity into the
@@ -35,7 +39,9 @@ class AirDataFilterConfig:
     specification) enters as white noise of the same low-frequency power, 2 sigma^2 tau.
     Frames whose NIS exceeds `gate_chi2` are rejected (both forms). `ins_source`: the INS the
     estimator reads, 'aligned' (the transfer-aligned slave INS, /alignment/odom) or 'reference'
-    (a reference INS, /reference_ins/odom: scenarios without a deck phase)."""
+    (a reference INS, /reference_ins/odom: scenarios without a deck phase). The estimator starts
+    at the first frame whose solve is windward at Mach >= `start_mach` (on a deck, in the
+    ship's airflow, the angles are undefined)."""
     form: str = 'tight'
     algorithm: str = 'ckf'
     ins_source: str = 'aligned'
@@ -45,8 +51,7 @@ class AirDataFilterConfig:
     lag_s_sea_level: float = 0.02
     wind_sigma_mps: float = 20.0
     wind_walk_mps_per_sqrt_s: float = 0.05
-    turbulence_sigma_mps: float = 0.0
-    turbulence_length_m: float = 533.0
+    turbulence_severity: str = 'none'
     static_offset_sigma: float = 0.01
     static_offset_walk_per_sqrt_s: float = 2e-5
     temperature_sigma_k: float = 10.0
@@ -58,8 +63,9 @@ class AirDataFilterConfig:
     ins_error_time_s: float = 300.0
     gate_chi2: float = 30.0
     fault_window_s: float = 1.0
-    fault_threshold: float = 9.0
+    fault_false_alarm: float = 1e-7
     output_rate_hz: float = 10.0
+    start_mach: float = 0.08
 
     def validate(self) -> None:
         require(self.form in FORMS, f"form must be one of {', '.join(FORMS)}, got {self.form!r}")
@@ -69,13 +75,18 @@ class AirDataFilterConfig:
                 f"algorithm must be one of {', '.join(ALGORITHMS)}, got {self.algorithm!r}")
         for name in ('port_sigma_pa', 'port_white_sigma_pa', 'wind_sigma_mps', 'static_offset_sigma',
                      'temperature_sigma_k', 'bias_sigma_pa', 'accel_sigma_mps2', 'gyro_sigma_dps',
-                     'turbulence_length_m', 'ins_error_time_s', 'gate_chi2', 'fault_window_s', 'fault_threshold',
+                     'ins_error_time_s', 'gate_chi2', 'fault_window_s',
                      'output_rate_hz'):
             v = getattr(self, name)
             require(v > 0.0, f"{name} must be > 0, got {v}")
-        for name in ('lag_s_sea_level', 'wind_walk_mps_per_sqrt_s', 'turbulence_sigma_mps',
+        require(self.turbulence_severity in SEVERITIES,
+                f"turbulence_severity must be one of {', '.join(SEVERITIES)}, got {self.turbulence_severity!r}")
+        for name in ('lag_s_sea_level', 'wind_walk_mps_per_sqrt_s',
                      'static_offset_walk_per_sqrt_s', 'temperature_walk_k_per_sqrt_s'):
             v = getattr(self, name)
             require(v >= 0.0, f"{name} must be >= 0, got {v}")
+        require(0.0 < self.fault_false_alarm < 0.01,
+                f"fault_false_alarm must be in (0, 0.01), got {self.fault_false_alarm}")
+        require(0.0 <= self.start_mach < 1.0, f"start_mach must be in [0, 1), got {self.start_mach}")
         require(0.0 <= self.port_correlation < 1.0, f"port_correlation must be in [0, 1), got {self.port_correlation}")
         require(self.lag_s_sea_level <= 1.0, f"lag_s_sea_level must be <= 1 s, got {self.lag_s_sea_level}")

@@ -10,6 +10,10 @@ import numpy as np
 
 from alignment_core.geometry.rotations import quat_to_dcm_batch, slerp
 
+INS_SPAN_S = 20.0
+"""INS history kept: a graph delivers streams out of step by seconds (and a lagged port looks
+back up to ~7 tau)."""
+
 
 @dataclass(frozen=True)
 class InsSample:

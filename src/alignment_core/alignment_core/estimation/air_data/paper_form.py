@@ -25,7 +25,7 @@ from alignment_core.air_data.pitot import impact_pressure_ratio
 from alignment_core.air_data.ports import PortModel
 from alignment_core.estimation.air_data.algorithms import NonlinearFilter, linearised_covariance, make_nonlinear_filter
 from alignment_core.estimation.air_data.config import AirDataFilterConfig
-from alignment_core.estimation.air_data.inputs import InsHistory, InsSample
+from alignment_core.estimation.air_data.inputs import INS_SPAN_S, InsHistory, InsSample
 from alignment_core.estimation.air_data.outputs import AIR_DATA_LABELS, AirDataEstimate
 from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import quat_to_dcm, skew
@@ -70,7 +70,7 @@ class PaperAirDataFilter:
         n = model.geometry.count
         self.port_cov = np.eye(n) * (cfg.port_sigma_pa**2 + cfg.port_white_sigma_pa**2)
         self.imu_interval_s = float(imu_interval_s)
-        self.ins = InsHistory(span_s=5.0)
+        self.ins = InsHistory(span_s=INS_SPAN_S)
         self.filter: NonlinearFilter | None = None
         self.t = -math.inf
         self.p_inf = math.nan
@@ -142,7 +142,10 @@ class PaperAirDataFilter:
         if m is None or not np.all(np.isfinite(m[1])):
             self.counts['unsolved'] += 1
             return False
-        z, r, self.p_inf, self.p_inf_var, self.temperature = m
+        z, r, p_inf, p_inf_var, temperature = m
+        if self.filter is None and np.linalg.norm(z) < self.cfg.start_mach * math.sqrt(GAMMA * R_AIR * temperature):
+            return False
+        self.p_inf, self.p_inf_var, self.temperature = p_inf, p_inf_var, temperature
         if self.filter is None:
             self.filter = make_nonlinear_filter(self.cfg.algorithm, z, r)
             self.t = t

@@ -18,17 +18,20 @@ from alignment_core.air_data.atmosphere import G0, GAMMA, P0, R_AIR
 from alignment_core.air_data.fads_solver import FadsSolver
 from alignment_core.air_data.flow_angles import air_velocity
 from alignment_core.air_data.ports import PortModel
+from alignment_core.estimation.air_data import turbulence_model
 from alignment_core.estimation.air_data.algorithms import NonlinearFilter, linearised_covariance, make_nonlinear_filter
 from alignment_core.estimation.air_data.config import AirDataFilterConfig
 from alignment_core.estimation.air_data.fault_detection import PortFaultDetector
-from alignment_core.estimation.air_data.inputs import InsHistory
+from alignment_core.estimation.air_data.inputs import INS_SPAN_S, InsHistory
 from alignment_core.estimation.air_data.outputs import AIR_DATA_LABELS, AirDataEstimate
 from alignment_core.estimation.air_data.port_prediction import (
     PortPrediction,
     StateLayout,
     air_data_of,
+    air_mass_velocity,
     lag_instants,
 )
+from alignment_core.estimation.air_data.turbulence_model import TurbulenceModel
 from alignment_core.geometry.rotations import quat_to_dcm, skew
 
 MIN_PORTS = 4          # fewer cannot separate alpha, beta, Mach and p_inf
@@ -43,13 +46,14 @@ class TightAirDataFilter:
         cfg.validate()
         self.cfg, self.model = cfg, model
         self.n_ports = model.geometry.count
-        self.layout = StateLayout(self.n_ports, cfg.turbulence_sigma_mps > 0.0)
+        self.layout = StateLayout(self.n_ports, cfg.turbulence_severity != 'none')
+        self.turbulence = TurbulenceModel(cfg.turbulence_severity) if self.layout.turbulence else None
         self.frame_interval_s = float(frame_interval_s)
-        self.ins = InsHistory(span_s=5.0)
+        self.ins = InsHistory(span_s=INS_SPAN_S)
         self.filter: NonlinearFilter | None = None
         self.t = -math.inf
         self.used = np.ones(self.n_ports, dtype=bool)
-        self.detector = PortFaultDetector(self.n_ports, cfg.fault_window_s, cfg.fault_threshold)
+        self.detector = PortFaultDetector(self.n_ports, cfg.fault_window_s, cfg.fault_false_alarm)
         self.counts = {'frames': 0, 'updates': 0, 'gated': 0, 'no_ins': 0, 'not_finite': 0}
         self.last_nis = math.nan
         self.failure = ''
@@ -80,10 +84,11 @@ class TightAirDataFilter:
     # ----- the filter -----
     def _initialise(self, t: float, p: np.ndarray) -> bool:
         sol = FadsSolver(self.model).solve(p)
-        if not bool(sol.converged):
+        if not bool(sol.converged) or float(sol.mach) < self.cfg.start_mach:
             return False
         ins = self.ins.sample(t)
-        t_std, p_std = (float(v) for v in standard_day.temperature_pressure(ins.height_m))
+        t_std = float(standard_day.temperature_pressure(ins.height_m)[0])
+        p_std = float(standard_day.day_pressure(ins.height_m, 0.0)[0, 0])
         speed = float(sol.mach) * math.sqrt(GAMMA * R_AIR * t_std)
         v_air_n = quat_to_dcm(ins.q_nb) @ air_velocity(speed, sol.alpha, sol.beta)
         lay, cfg = self.layout, self.cfg
@@ -92,7 +97,7 @@ class TightAirDataFilter:
         x0[lay.static] = float(sol.p_inf) / p_std - 1.0
         var = np.zeros(lay.size)
         var[lay.wind] = cfg.wind_sigma_mps**2
-        var[lay.turb] = cfg.turbulence_sigma_mps**2
+        var[lay.turb] = np.diagonal(turbulence_model.STATIONARY) if lay.turbulence else ()
         var[lay.static] = cfg.static_offset_sigma**2
         var[lay.temperature] = cfg.temperature_sigma_k**2
         var[lay.bias] = cfg.bias_sigma_pa**2
@@ -108,27 +113,35 @@ class TightAirDataFilter:
         phi = np.ones(self.layout.size)
         q = np.zeros(self.layout.size)
         q[lay.wind] = cfg.wind_walk_mps_per_sqrt_s**2 * dt
+        phi_full, q_full = np.diag(phi), np.diag(q)
         if lay.turbulence:
-            speed = max(float(np.linalg.norm(self.ins.sample(t).v_enu - f.x[lay.wind])), 1.0)
-            decay = math.exp(-dt * speed / cfg.turbulence_length_m)
-            phi[lay.turb], q[lay.turb] = decay, cfg.turbulence_sigma_mps**2 * (1.0 - decay * decay)
+            _, rates = self._turbulence_at(t)
+            phi_t, q_t = turbulence_model.transition(rates * dt)
+            phi_full[lay.turb, lay.turb], q_full[lay.turb, lay.turb] = phi_t, q_t
         q[lay.static] = cfg.static_offset_walk_per_sqrt_s**2 * dt
         q[lay.temperature] = cfg.temperature_walk_k_per_sqrt_s**2 * dt
         rho = cfg.port_correlation ** (dt / self.frame_interval_s)
         phi[lay.noise], q[lay.noise] = rho, cfg.port_sigma_pa**2 * (1.0 - rho * rho)
-        f.predict(np.diag(phi), np.diag(q))
+        for k in (lay.static, lay.temperature, *range(lay.noise.start, lay.noise.stop)):
+            phi_full[k, k], q_full[k, k] = phi[k], q[k]
+        q_full[lay.wind, lay.wind] = np.diag(q[lay.wind])
+        f.predict(phi_full, q_full)
         self.t = t
 
     def _update(self, t: float, p: np.ndarray) -> bool:
         f = self.filter
         assert f is not None
         ports = np.flatnonzero(self.used)
-        if self.cfg.lag_s_sea_level > 0.0:
-            instants = lag_instants(t, self.cfg.lag_s_sea_level * P0 / p[ports])
-        else:
-            instants = np.full(ports.size, t)
-        h = PortPrediction(self.model, self.layout, ports, self.ins.at(instants))
+        taus = self.cfg.lag_s_sea_level * P0 / p[ports]
+        instants = lag_instants(t, taus) if self.cfg.lag_s_sea_level > 0.0 else np.full(ports.size, t)
+        turb_maps = None
         r = np.eye(ports.size) * self.cfg.port_white_sigma_pa**2
+        if self.layout.turbulence:
+            m, rates = self._turbulence_at(t)
+            turb_maps = m[None, :, :] @ turbulence_model.looking_back(rates, t - instants)
+        h = PortPrediction(self.model, self.layout, ports, self.ins.at(instants), turb_maps)
+        if self.layout.turbulence and self.cfg.lag_s_sea_level > 0.0:
+            r = r + self._lag_noise(h, f.x, m, rates, taus)
         try:
             res = f.update_nonlinear(p[ports], h, r, gate_chi2=self.cfg.gate_chi2)
         except np.linalg.LinAlgError as e:
@@ -140,13 +153,53 @@ class TightAirDataFilter:
         self.last_nis = res.nis
         normalised = res.innovation**2 / np.diagonal(res.s)
         worst = self.detector.add(t, ports, normalised)
+        if res.accepted:
+            self.detector.clear()
+        elif worst is None and ports.size > MIN_PORTS:
+            worst = self.detector.leave_one_out(t, ports, res.innovation, res.s)
         if worst is not None and ports.size > MIN_PORTS:
             self.used[worst] = False
+            self._after_exclusion(f)
         if res.accepted:
             self.counts['updates'] += 1
         else:
             self.counts['gated'] += 1
         return res.accepted
+
+    def _after_exclusion(self, f) -> None:
+        """The failed port may have pulled the air-mass states before it was caught: their
+        covariance goes back to the start's (correlations with them dropped), so the healthy
+        ports set them again within a few frames."""
+        lay, cfg = self.layout, self.cfg
+        air = np.r_[np.arange(lay.wind.start, lay.wind.stop), np.arange(lay.turb.start, lay.turb.stop)]
+        p = f.P.copy()
+        p[air, :] = 0.0
+        p[:, air] = 0.0
+        p[lay.wind, lay.wind] = np.eye(3) * cfg.wind_sigma_mps**2
+        if lay.turbulence:
+            p[lay.turb, lay.turb] = turbulence_model.STATIONARY
+        f.P = p
+
+    def _lag_noise(self, h: PortPrediction, x: np.ndarray, m: np.ndarray, rates: np.ndarray,
+                   taus: np.ndarray) -> np.ndarray:
+        """R of the gusts inside the ports' lag windows (turbulence_model.lag_covariance), through
+        each port's sensitivity to the air-mass velocity, dp_i / dw (central differences)."""
+        step = 0.01
+        pts = np.repeat(x[None, :], 6, axis=0)
+        for k in range(3):
+            pts[2 * k, self.layout.wind.start + k] += step
+            pts[2 * k + 1, self.layout.wind.start + k] -= step
+        y = h(pts)
+        jac = np.stack([(y[2 * k] - y[2 * k + 1]) / (2 * step) for k in range(3)], axis=-1)    # (m, 3)
+        cov = turbulence_model.lag_covariance(m, rates, taus)                                  # (m, m, 3, 3)
+        return np.einsum('ia,ijab,jb->ij', jac, cov, jac)
+
+    def _turbulence_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(state -> ENU turbulence map (3, 5), rates V / L (3,)) at the INS flight at t."""
+        assert self.filter is not None and self.turbulence is not None
+        ins = self.ins.sample(t)
+        airspeed = float(np.linalg.norm(ins.v_enu - self.filter.x[self.layout.wind]))
+        return self.turbulence.at(ins.height_m, ins.v_enu, airspeed)
 
     # ----- outputs -----
     @property
@@ -167,12 +220,14 @@ class TightAirDataFilter:
         t = self.t if t is None else t
         ins = self.ins.sample(t)
         c_bn = quat_to_dcm(ins.q_nb)
-        t_std, p_std = (float(v) for v in standard_day.temperature_pressure(ins.height_m))
+        t_std = float(standard_day.temperature_pressure(ins.height_m)[0])
         lay = self.layout
 
+        turb_map = self._turbulence_at(t)[0] if lay.turbulence else None
+
         def outputs(x: np.ndarray) -> np.ndarray:
-            a = air_data_of(x, lay, c_bn, ins.v_enu, t_std, p_std)
-            wind = x[:, lay.wind] + (x[:, lay.turb] if lay.turbulence else 0.0)
+            a = air_data_of(x, lay, c_bn, ins.v_enu, t_std, ins.height_m, turb_map)
+            wind = air_mass_velocity(x, lay, turb_map)
             return np.column_stack([a['mach'], a['alpha'], a['beta'], a['speed'], a['p_inf'], a['qc'],
                                     wind, a['v_air_body'], a['p_inf'] + a['qc']])
 

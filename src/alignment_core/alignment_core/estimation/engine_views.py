@@ -1,0 +1,134 @@
+"""The transfer-alignment engine's read-only views (docs/engine.md, using it): its outputs, the
+published view, counters, diagnostics, the live solution, corrections, deck motion and health.
+A mixin of TransferAlignment (engine.py), which owns the state these read."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from alignment_core.estimation import status
+from alignment_core.estimation.consistency import NisMonitor
+from alignment_core.estimation.health import ERROR, WARN
+from alignment_core.estimation.launch_detection import LaunchDetector
+from alignment_core.estimation.matching import LiveSolution, MatchResults
+from alignment_core.estimation.models import Corrections, ErrorModel
+from alignment_core.estimation.outputs import Counters, DeckMotion, Diagnostics, Estimate
+from alignment_core.estimation.plausibility import InputGate
+from alignment_core.estimation.publication import EstimateMaker
+from alignment_core.navigation.ordering import StampMerger
+from alignment_core.navigation.strapdown import NavState
+
+
+class EngineViews:
+    """Read-only properties over the engine's state (copies, never a reference into it)."""
+    _outputs: list[Estimate]
+    _published: list[Estimate]
+    _counters: Counters
+    _gate: InputGate
+    _maker: EstimateMaker
+    _live: LiveSolution | None
+    _health: status.Health
+    _monitor: NisMonitor
+    _merger: StampMerger
+    _matching: bool
+    _results: MatchResults
+    _launch: LaunchDetector
+    _deck_disp: np.ndarray
+    _model: ErrorModel
+
+    @property
+    def outputs(self) -> tuple[Estimate, ...]:
+        """Every estimate so far, one per output instant (the filter's own, for scoring)."""
+        return tuple(self._outputs)
+
+    @property
+    def published(self) -> tuple[Estimate, ...]:
+        """What a node publishes for each output: never non-finite or absurd, the last good
+        estimate held from an ERROR on (publication.py)."""
+        return tuple(self._published)
+
+    @property
+    def latest(self) -> Estimate | None:
+        return self._outputs[-1] if self._outputs else None
+
+    @property
+    def counters(self) -> Counters:
+        """A copy of the counters."""
+        return dataclasses.replace(self._counters)
+
+    @property
+    def last_rejection(self) -> str:
+        """Why the last sample pushed was rejected ('' if it was accepted)."""
+        return self._gate.last_rejection
+
+    def status(self) -> tuple[int, tuple[str, ...]]:
+        """(level, flags) now: the estimates' (breakdown, inconsistent, gap), WARN for a silent
+        master or LDV ('master_silent', 'ldv_silent') and for any input trouble so far."""
+        level, flags = status.level_and_flags(self._health, self._monitor)
+        silent = self._gate.silent()
+        if silent:
+            level = max(level, WARN)
+            flags += tuple(f'{k}_silent' for k in silent)
+        if status.input_trouble(self._counters):
+            level = max(level, WARN)
+        return level, flags
+
+    def diagnostics(self) -> Diagnostics:
+        """The filter's diagnostics as of the last output, the status now, failure, message and
+        queued samples, and the consistency monitor's last window."""
+        if self._maker.held is not None:
+            filt = dict(self._maker.held[2])
+        else:
+            filt = {} if self._live is None else self._live.kf.diagnostics()
+        level, flags = self.status()
+        silent = self._gate.silent()
+        return Diagnostics(filt, self.healthy, self.failure, self._merger.pending(), level, flags,
+                           status.message(level, self._health, self._monitor, self._matching, silent), silent,
+                           self._monitor.summary())
+
+    @property
+    def solution(self) -> NavState | None:
+        """A copy of the live slave solution (None before initialisation)."""
+        if self._live is None:
+            return None
+        st = self._live.ins.s
+        return dataclasses.replace(st, q_nb=st.q_nb.copy(), v_n=st.v_n.copy(), prev_dtheta=st.prev_dtheta.copy(),
+                                   prev_dv=st.prev_dv.copy())
+
+    @property
+    def corrections(self) -> Corrections:
+        """A copy of what feedback accumulated outside the strapdown (sensor biases, lever arm)."""
+        c = self._results.corr
+        return Corrections(bg=c.bg.copy(), ba=c.ba.copy(), dr=c.dr.copy(), mu=c.mu.copy())
+
+    @property
+    def deck_motion(self) -> DeckMotion:
+        d = self._launch
+        return DeckMotion(d.moving, d.t_moving_ns, d.t_launch_ns, self._deck_disp.copy())
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return self._model.labels
+
+    @property
+    def n_states(self) -> int:
+        return self._model.n
+
+    @property
+    def model_name(self) -> str:
+        return self._model.name
+
+    @property
+    def uses_doppler(self) -> bool:
+        return self._model.uses_doppler
+
+    @property
+    def healthy(self) -> bool:
+        """False at level ERROR: a breakdown, an inconsistent filter, an unrecovered long gap."""
+        return status.level_and_flags(self._health, self._monitor)[0] < ERROR
+
+    @property
+    def failure(self) -> str:
+        """Why the estimate is not healthy ('' while it is)."""
+        return status.failure(self._health, self._monitor)

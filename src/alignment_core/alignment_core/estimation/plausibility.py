@@ -1,0 +1,169 @@
+"""Input plausibility: what a sample must satisfy before the engine queues it (docs/engine.md,
+input plausibility). A non-finite value, a master quaternion off unit norm, a value beyond the
+sensor's or the vehicle's physical range, or a stamp far ahead of every other stream (the outlier,
+not the samples after it) is rejected and counted by reason; a master quaternion within the
+tolerance is normalised. The filter node adds 'frame_id' (it never passes such a message on)."""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from alignment_core.estimation.config import FilterConfig
+from alignment_core.estimation.health import finite
+from alignment_core.estimation.outputs import Counters
+from alignment_core.samples import DopplerSample, ImuSample, LdvSample, MasterSample
+from alignment_core.units import DEG, G0
+
+# reasons a sample is rejected (Counters.rejected_<reason>; the node adds 'frame_id')
+REASONS = ('nonfinite', 'out_of_order', 'quaternion', 'range', 'future_stamp')
+UNIT_ROUNDING = 1e-12      # |norm - 1| below this is rounding: the quaternion is used as given
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The plausibility limits in SI units (rad/s, m/s^2, m/s, m, ns), from filter.*."""
+    quaternion_tol: float
+    gyro_max: float                  # per axis
+    accel_max: float                 # per axis
+    master_speed: float
+    master_rate: float
+    position: float
+    ldv_speed: float
+    doppler_speed: float
+    future_ns: int                   # lead over every other stream that makes a stamp the outlier
+    silence_ns: int
+
+    @classmethod
+    def of(cls, cfg: FilterConfig) -> Limits:
+        """The streams' known latencies add to the lead a stamp may legitimately have."""
+        lead = cfg.future_stamp_s + max(cfg.master_latency_s, cfg.ldv_latency_s, cfg.doppler_latency_s)
+        return cls(cfg.quaternion_norm_tolerance, cfg.imu_gyro_range_dps * DEG, cfg.imu_accel_range_g * G0,
+                   cfg.master_speed_max_mps, cfg.master_rate_max_dps * DEG, cfg.position_max_m,
+                   cfg.ldv_speed_max_mps, cfg.doppler_speed_max_mps, int(round(lead * 1e9)),
+                   int(round(cfg.silence_warn_s * 1e9)))
+
+
+def _norm(a: Any) -> float:
+    """|a| of a 3-vector without overflow (hypot scales)."""
+    x, y, z = a.tolist()
+    return math.hypot(x, y, z)
+
+
+def _max_abs(a: Any) -> float:
+    x, y, z = a.tolist()
+    return max(abs(x), abs(y), abs(z))
+
+
+def imu_reason(s: ImuSample, lim: Limits) -> str:
+    """'' if plausible, else why not: a rate or specific force beyond the IMU's full scale."""
+    if not finite(s.gyro, s.accel):
+        return 'nonfinite'
+    if _max_abs(s.gyro) > lim.gyro_max or _max_abs(s.accel) > lim.accel_max:
+        return 'range'
+    return ''
+
+
+def master_check(s: MasterSample, lim: Limits) -> tuple[MasterSample | None, str]:
+    """(the sample, '') if plausible, its quaternion normalised when it is off unit norm by more
+    than rounding (and by no more than the tolerance), else (None, why not)."""
+    if not finite(s.p_w, s.q_nb, s.v_b, s.w_b):
+        return None, 'nonfinite'
+    n = math.hypot(*s.q_nb.tolist())
+    if abs(n - 1.0) > lim.quaternion_tol:
+        return None, 'quaternion'
+    if _norm(s.v_b) > lim.master_speed or _norm(s.w_b) > lim.master_rate or _norm(s.p_w) > lim.position:
+        return None, 'range'
+    if abs(n - 1.0) > UNIT_ROUNDING:
+        return dataclasses.replace(s, q_nb=s.q_nb / n), ''
+    return s, ''
+
+
+def ldv_reason(s: LdvSample, lim: Limits) -> str:
+    """A valid LDV sample must be finite and slower than the deck run allows."""
+    if not s.valid:
+        return ''
+    if not finite(s.v_s):
+        return 'nonfinite'
+    return 'range' if _norm(s.v_s) > lim.ldv_speed else ''
+
+
+def doppler_reason(s: DopplerSample, lim: Limits) -> str:
+    """A valid radar sample must be finite, with a finite sigma, and slower than the aircraft."""
+    if not s.valid:
+        return ''
+    if not (finite(s.v_b) and math.isfinite(s.sigma)):
+        return 'nonfinite'
+    return 'range' if _norm(s.v_b) > lim.doppler_speed or s.sigma < 0.0 else ''
+
+
+class InputGate:
+    """The plausibility of every sample pushed, the stamp guard and the rejection counts. A stamp
+    is the outlier when it jumps ahead of its own stream's previous one and of every other
+    stream's latest by more than `future_ns` (a stream that resumes after a silence does not:
+    the others have moved on with it). A stream's first sample is never taken for the outlier."""
+
+    def __init__(self, cfg: FilterConfig, counters: Counters, streams: tuple[str, ...]) -> None:
+        self.limits = Limits.of(cfg)
+        self._counters = counters
+        self._latest: dict[str, int | None] = {k: None for k in streams}
+        self._first: int | None = None
+        self.last_rejection = ''          # why the last sample was rejected ('' if accepted)
+
+    def check(self, stream: str, s: Any) -> Any:
+        """The sample to queue (a master sample possibly normalised) or None (rejected, counted)."""
+        lim = self.limits
+        given = s
+        if stream == 'imu':
+            why = imu_reason(s, lim)
+        elif stream == 'master':
+            s, why = master_check(s, lim)
+        elif stream == 'ldv':
+            why = ldv_reason(s, lim)
+        else:
+            why = doppler_reason(s, lim)
+        if not why and self._future(stream, given.t_ns):
+            why = 'future_stamp'
+        self.last_rejection = why
+        if why:
+            name = f'rejected_{why}'
+            setattr(self._counters, name, getattr(self._counters, name) + 1)
+            return None
+        if s is not given:
+            self._counters.quaternion_normalised += 1
+        return s
+
+    def reject_out_of_order(self) -> None:
+        self._counters.rejected_out_of_order += 1
+        self.last_rejection = 'out_of_order'
+
+    def accepted(self, stream: str, t_ns: int) -> None:
+        """Record a stamp the stream's queue took."""
+        self._latest[stream] = t_ns
+        if self._first is None:
+            self._first = t_ns
+
+    def _future(self, stream: str, t_ns: int) -> bool:
+        prev = self._latest[stream]
+        fut = self.limits.future_ns
+        if prev is None or t_ns - prev <= fut:
+            return False
+        others = [v for k, v in self._latest.items() if k != stream and v is not None]
+        return bool(others) and t_ns - max(others) > fut
+
+    def silent(self, streams: tuple[str, ...] = ('master', 'ldv')) -> tuple[str, ...]:
+        """The streams whose latest stamp lags the newest of any stream by more than silence_ns
+        (or that never delivered while the others ran that long)."""
+        if self._first is None:
+            return ()
+        newest = max(v for v in self._latest.values() if v is not None)
+        lim = self.limits.silence_ns
+        out = []
+        for k in streams:
+            if k not in self._latest:
+                continue
+            last = self._latest[k]
+            if newest - (self._first if last is None else last) > lim:
+                out.append(k)
+        return tuple(out)

@@ -1,0 +1,172 @@
+"""What the engine publishes (docs/engine.md, outputs): the slave INS solution after the filter's
+corrections as odometry (position, attitude and body velocity and rate, with covariances), and
+the published view of the estimates: never a non-finite or absurd estimate, and from an ERROR on
+the last good estimate (held), so no topic ever carries NaN or a wrong alignment at OK."""
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+from alignment_core.estimation.health import ERROR, OK, finite
+from alignment_core.estimation.matching import LiveSolution, MatchResults
+from alignment_core.estimation.models import ErrorModel
+from alignment_core.estimation.models.base import DV, EPS
+from alignment_core.estimation.outputs import Estimate
+from alignment_core.geometry import earth
+from alignment_core.geometry.rotations import quat_to_dcm
+from alignment_core.navigation.strapdown import NavState
+from alignment_core.units import DEG, DPH
+
+UNKNOWN = -1.0            # a covariance diagonal of -1: not estimated (as /alignment/attitude's position)
+
+
+class Odometry(NamedTuple):
+    """The slave solution for /alignment/odom (world ENU position, body FLU axes)."""
+    p_w: np.ndarray           # (3,) m
+    v_b: np.ndarray           # (3,) m/s, velocity w.r.t. the Earth in body axes
+    w_b: np.ndarray           # (3,) rad/s, body rate w.r.t. the nav frame
+    pose_cov: np.ndarray      # (6, 6) position m^2, attitude rad^2 (nav-frame rotation vector)
+    twist_cov: np.ndarray     # (6, 6) body velocity, body rate
+
+
+class OdometryMaker:
+    """Odometry of the slave from its NavState, the filter's covariance and the last gyro sample.
+    Velocity covariance: the velocity error states (nav axes) rotated into body axes, unknown (-1)
+    when a model lacks an axis; position: from seed001_13's dlat/dlon states, else unknown; body
+    rate: the gyro's white noise over one IMU interval plus its bias uncertainty."""
+
+    def __init__(self, model: ErrorModel, plane: earth.TangentPlane, imu_dt: float, arw_dpsh: float,
+                 gyro_bias_sigma_dph: float) -> None:
+        self._plane = plane
+        self._att = model.attitude
+        dv = [i for i, k in enumerate(model.kinds) if k == DV]
+        self._dv = dv if len(dv) == 3 else None
+        eps = [i for i, k in enumerate(model.kinds) if k == EPS]
+        self._eps = eps if len(eps) == 3 else None
+        labels = model.labels
+        self._pos = (labels.index('dlon'), labels.index('dlat')) if 'dlat' in labels and 'dlon' in labels else None
+        self._rate_var = (arw_dpsh * DEG / 60.0) ** 2 / imu_dt
+        self._bias_var = (gyro_bias_sigma_dph * DPH) ** 2
+
+    def make(self, st: NavState, p: np.ndarray, gyro: np.ndarray | None, bg: np.ndarray) -> Odometry:
+        """p: the filter's covariance; gyro: the last raw gyro rate (None before the first IMU
+        step), bg its bias estimate. The body rate w.r.t. the nav frame is the gyro's less the nav
+        frame's own rate w.r.t. inertial space (Earth rate and transport rate at the solution)."""
+        c = quat_to_dcm(st.q_nb)
+        w_in = earth.omega_ie_n(st.lat) + earth.omega_en_n(st.lat, st.h, st.v_n)
+        p_w = np.asarray(self._plane.from_geodetic(st.lat, st.lon, st.h), dtype=float).reshape(3)
+        v_b = c.T @ st.v_n
+        w_b = np.zeros(3) if gyro is None else (gyro - bg) - c.T @ w_in
+        pose = np.zeros((6, 6))
+        pose[0, 0] = pose[1, 1] = pose[2, 2] = UNKNOWN
+        if self._pos is not None:
+            r_m, r_n = earth.radii(st.lat)
+            i_lon, i_lat = self._pos
+            pose[0, 0] = p[i_lon, i_lon] * (float(r_n) + st.h) ** 2 * math.cos(st.lat) ** 2
+            pose[1, 1] = p[i_lat, i_lat] * (float(r_m) + st.h) ** 2
+        att = self._att
+        pose[3:, 3:] = p[att, att]
+        twist = np.zeros((6, 6))
+        if self._dv is not None:
+            twist[:3, :3] = c.T @ p[np.ix_(self._dv, self._dv)] @ c
+        else:
+            twist[0, 0] = twist[1, 1] = twist[2, 2] = UNKNOWN
+        bias = np.diagonal(p)[self._eps] if self._eps is not None else np.full(3, self._bias_var)
+        twist[3:, 3:] = np.diag(self._rate_var + bias)
+        return Odometry(p_w, v_b, w_b, pose, twist)
+
+
+class EstimateMaker:
+    """The Estimate of each output instant from the live solution and the matches' results; after
+    a breakdown, the last healthy output's covariance, sigma, diagnostics and odometry covariances
+    (held) with the free-inertial slave's attitude and odometry."""
+
+    def __init__(self, model: ErrorModel, odometry: OdometryMaker) -> None:
+        self._model = model
+        self._odometry = odometry
+        self.held: tuple[np.ndarray, np.ndarray, dict, np.ndarray, np.ndarray] | None = None
+
+    def keep(self, live: LiveSolution, res: MatchResults) -> bool:
+        """Keep the live covariance for the next output (and as the held one); False if it or the
+        published misalignment is not finite (a breakdown)."""
+        att, p = self._model.attitude, live.kf.P
+        cov, sigma = p[att, att].copy(), np.sqrt(np.diag(p))
+        if not (finite(cov, sigma) and finite(res.mu, res.mu_sigma)):
+            return False
+        odo = self._odometry.make(live.ins.s, p, live.gyro, res.corr.bg)
+        self.held = (cov, sigma, live.kf.diagnostics(), odo.pose_cov, odo.twist_cov)
+        return True
+
+    def make(self, t: int, live: LiveSolution, res: MatchResults, updates: int, matching: bool,
+             level: int, flags: tuple[str, ...]) -> Estimate:
+        """The output at master stamp t with what `keep` kept last (the prior before any)."""
+        st = live.ins.s
+        if self.held is None:
+            att, p0 = self._model.attitude, self._model.initial_covariance()
+            odo0 = self._odometry.make(st, p0, live.gyro, res.corr.bg)
+            self.held = (p0[att, att].copy(), np.sqrt(np.diag(p0)), {}, odo0.pose_cov, odo0.twist_cov)
+        cov, sigma, diag, pose_cov, twist_cov = self.held
+        p_w, v_b, w_b = self._odometry.make(st, live.kf.P, live.gyro, res.corr.bg)[:3]
+        corr = res.corr
+        return Estimate(
+            t_ns=t, misalignment=res.mu.copy(), misalignment_sigma=res.mu_sigma.copy(),
+            q_nb=st.q_nb.copy(), attitude_cov=cov, x=res.x.copy(),
+            sigma=sigma, bias_gyro=corr.bg.copy(), bias_accel=corr.ba.copy(),
+            nis=res.nis, updates=updates, matching=matching, fading=diag.get('fading', 1.0),
+            healthy=level < ERROR, level=level, flags=flags, p_w=p_w, v_b=v_b, w_b=w_b,
+            pose_cov=pose_cov, twist_cov=twist_cov)
+
+
+class PublishGuard:
+    """The published view: an estimate at level ERROR, or with a non-finite field, or a
+    misalignment beyond `max_misalignment` rad, is replaced by the last good one (the last at OK,
+    since a WARN may already be the start of the trouble; stamped now, at ERROR, flagged 'held');
+    before any good one, by the prior (zero misalignment, its sigma).
+    After a numerical breakdown the engine holds its last good estimate itself (the outputs
+    carry it, with the free-inertial attitude): those pass, flagged 'held', unless the view is
+    already holding an earlier one."""
+
+    def __init__(self, max_misalignment: float) -> None:
+        self.max_misalignment = max_misalignment
+        self.last_good: Estimate | None = None
+        self.holding = False
+
+    def good(self, e: Estimate) -> bool:
+        arrays = [e.misalignment, e.misalignment_sigma, e.q_nb, e.attitude_cov, e.x, e.sigma]
+        arrays += [a for a in (e.p_w, e.v_b, e.w_b, e.pose_cov, e.twist_cov) if a is not None]
+        if not finite(*arrays):
+            return False
+        q = e.q_nb
+        if abs(float(q @ q) - 1.0) > 1e-6:
+            return False
+        return bool(np.max(np.abs(e.misalignment)) <= self.max_misalignment)
+
+    def publish(self, e: Estimate, prior: Callable[[Estimate], Estimate]) -> Estimate:
+        """What a node publishes for output e; prior(e) stands in before the first good one."""
+        good = self.good(e)
+        if good and e.level < ERROR:
+            if e.level == OK or self.last_good is None:
+                self.last_good = e
+            self.holding = False
+            return e
+        if good and not self.holding and set(e.flags) == {'breakdown'}:
+            return dataclasses.replace(e, flags=(*e.flags, 'held'))
+        self.holding = True
+        held = self.last_good if self.last_good is not None else prior(e)
+        why = e.flags if good else (*e.flags, 'absurd')
+        return dataclasses.replace(held, t_ns=e.t_ns, level=ERROR, healthy=False, matching=False,
+                                   updates=e.updates, flags=tuple(dict.fromkeys((*why, 'held'))))
+
+
+def prior_estimate(e: Estimate, mu_sigma: np.ndarray, p0: np.ndarray, att: slice) -> Estimate:
+    """The stand-in before any good estimate: zero misalignment with the prior's sigma and
+    covariance, e's attitude if it is a finite unit quaternion (else the identity), no odometry."""
+    q = e.q_nb if finite(e.q_nb) and abs(float(e.q_nb @ e.q_nb) - 1.0) <= 1e-6 else np.array([0.0, 0.0, 0.0, 1.0])
+    return dataclasses.replace(
+        e, misalignment=np.zeros(3), misalignment_sigma=mu_sigma.copy(), q_nb=q, attitude_cov=p0[att, att].copy(),
+        x=np.zeros(len(e.x)), sigma=np.sqrt(np.diag(p0)), bias_gyro=np.zeros(3), bias_accel=np.zeros(3),
+        nis=math.nan, p_w=None, v_b=None, w_b=None, pose_cov=None, twist_cov=None)

@@ -1,0 +1,76 @@
+"""The filter node's input path and its /alignment/odom message, in-process (no graph): messages in
+a frame other than the one expected are rejected and counted as 'frame_id' (a WARN in
+/diagnostics), the rest reach the engine; odometry carries the slave solution per REP-105."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.estimation.engine import TransferAlignment
+from alignment_core.estimation.health import OK, WARN
+from alignment_core.units import G0, KNOT
+from alignment_filter_node.node import FilterInputs
+from alignment_ros import convert, topics
+
+SC = scenario.load('catapult', {'duration_s': 3.0, 'aircraft.catapult.launch_time_s': 2.0})
+
+
+@pytest.fixture(scope='module')
+def inp():
+    return pipeline.simulate(SC)
+
+
+def _inputs():
+    return FilterInputs(TransferAlignment(SC.filter, pipeline.plane_of(SC), SC.rate_hz))
+
+
+def test_expected_frames_pass_and_others_are_rejected(inp):
+    f = _inputs()
+    assert f.imu(convert.imu_to_msg(inp.imu[0], 0.0, 0.0)) == ''
+    assert f.ldv(convert.ldv_to_msg(inp.ldv[0])) == ''
+    assert f.master(convert.master_to_msg(inp.master[0])) == ''
+    assert f.status() == (OK, ())
+    imu = convert.imu_to_msg(inp.imu[1], 0.0, 0.0)
+    imu.header.frame_id = 'ship'
+    master = convert.master_to_msg(inp.master[1])
+    master.child_frame_id = 'aircraft'                      # the master INS is on the ship
+    ldv = convert.ldv_to_msg(inp.ldv[1])
+    ldv.header.frame_id = ''
+    assert f.imu(imu) == f.master(master) == f.ldv(ldv) == 'frame_id'
+    assert f.rejected_frame_id == 3 and f.engine.counters.imu == 0
+    level, flags = f.status()
+    assert level == WARN and flags == ('frame_id',)
+
+
+def test_an_engine_rejection_comes_back_with_its_reason(inp):
+    f = _inputs()
+    m = convert.master_to_msg(inp.master[0])
+    m.pose.pose.orientation.w *= 2.0
+    assert f.master(m) == 'quaternion'
+    assert f.master(convert.master_to_msg(inp.master[0])) == ''
+    assert f.master(convert.master_to_msg(inp.master[0])) == 'out_of_order'
+
+
+def test_odometry_message_per_rep_105(inp):
+    """Pose in 'world' (position, attitude, 6x6: position then attitude), twist in the child frame
+    'aircraft' (body velocity, body rate), as the estimate gives them."""
+    f = pipeline.align(SC, inp)
+    e = f.published[-1]
+    m = convert.estimate_to_odometry(e)
+    assert m is not None
+    assert (m.header.frame_id, m.child_frame_id) == (topics.FRAME_WORLD, topics.FRAME_AIRCRAFT)
+    assert convert.to_ns(m.header.stamp) == e.t_ns
+    p, q = m.pose.pose.position, m.pose.pose.orientation
+    np.testing.assert_array_equal([p.x, p.y, p.z], e.p_w)
+    np.testing.assert_array_equal([q.x, q.y, q.z, q.w], e.q_nb)
+    v, w = m.twist.twist.linear, m.twist.twist.angular
+    np.testing.assert_array_equal([v.x, v.y, v.z], e.v_b)
+    np.testing.assert_array_equal([w.x, w.y, w.z], e.w_b)
+    np.testing.assert_array_equal(np.array(m.pose.covariance).reshape(6, 6), e.pose_cov)
+    np.testing.assert_array_equal(np.array(m.twist.covariance).reshape(6, 6), e.twist_cov)
+    np.testing.assert_array_equal(np.array(m.pose.covariance).reshape(6, 6)[3:, 3:], e.attitude_cov)
+    # 1 s into the 2 g stroke the aircraft moves along its x axis (the ship's bow) at the ship's
+    # 10 kn plus 2 g * 1 s relative to the deck (the sea state's surge and the lever arm: ~1 %)
+    assert e.v_b[0] == pytest.approx(10.0 * KNOT + 2.0 * G0 * 1.0, rel=0.02)

@@ -1,0 +1,65 @@
+"""The launcher's bookkeeping (alignment_ros.launch, signals): which publishers are foreign, exit
+statuses, a signal that arrives while a process is being started, impossible option values."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+
+import pytest
+
+from alignment_ros.launch import Run, number_type
+from alignment_ros.signals import Interrupted, SignalGuard
+
+
+def run_with(tmp_path, publishers: dict) -> Run:
+    (tmp_path / 'stats').mkdir()
+    (tmp_path / 'stats' / 'recorder.json').write_text(json.dumps({'publishers': publishers}))
+    return Run('test', tmp_path, SignalGuard())
+
+
+def test_foreign_publishers_are_other_nodes_or_a_second_one_of_ours(tmp_path):
+    run = run_with(tmp_path, {
+        '/ship/odom': {'/ship_motion_node': 1},
+        '/clock': {'/ship_motion_node': 2},                   # a leftover ship of another run
+        '/aircraft/imu': {'/slave_ins_node': 1, '/talker': 1},
+        '/master/odom': {'/_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_': 1},   # never named
+    })
+    ours = {'ship_motion_node', 'slave_ins_node', 'master_ins_node'}
+    assert run.foreign_publishers(ours) == {
+        '/clock': ['/ship_motion_node'], '/aircraft/imu': ['/talker'],
+        '/master/odom': ['/_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_']}
+
+
+def test_exit_status(tmp_path):
+    run = run_with(tmp_path, {})
+    assert run.exit_code(True) == 0
+    assert run.exit_code(False) == 1
+    run.failure = 'the recorder ended before the end time'
+    assert run.exit_code(True) == 1
+    run.interrupted = Interrupted(signal.SIGTERM)
+    assert run.exit_code(False) == 143 and Interrupted(signal.SIGINT).exit_code == 130
+
+
+def test_a_signal_while_starting_a_process_waits_until_it_is_registered():
+    started = []
+    with SignalGuard() as guard:
+        with pytest.raises(Interrupted) as e:
+            with guard.deferred():
+                os.kill(os.getpid(), signal.SIGINT)
+                started.append('registered')        # still runs: the signal is deferred
+        assert e.value.signum == signal.SIGINT and started == ['registered']
+        os.kill(os.getpid(), signal.SIGTERM)        # later ones: the run is stopping already
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.parametrize('text, ok', [('0', True), ('2.5', True), ('-1', False), ('nan', False),
+                                      ('inf', False), ('x', False)])
+def test_non_negative_finite_numbers(text, ok):
+    parse = number_type(0.0)
+    if ok:
+        assert parse(text) == float(text)
+    else:
+        with pytest.raises(argparse.ArgumentTypeError):
+            parse(text)

@@ -1,0 +1,103 @@
+"""The run summary tells the truth: a lost message, a message nobody of the run published, or
+outputs that stop before the end make the run incomplete (summary.json ``complete: false``,
+``problems``, the table's last line), and the simulated time claimed is the one the filter's
+outputs reached. A small bag written here: truth on deck 1.0..2.0 s, outputs 1.0..3.0 s at
+10 Hz (the estimate is truth + 1 mrad on each axis, sigma 2 mrad)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from geometry_msgs.msg import Vector3Stamped
+from rclpy.serialization import serialize_message
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+
+from alignment_ros import summary
+from alignment_ros.bag import BagWriter
+
+NS = 1_000_000_000
+TRUTH = (0.01, -0.02, 0.03)
+
+
+def vec(t_ns: int, v) -> bytes:
+    m = Vector3Stamped()
+    m.header.stamp.sec, m.header.stamp.nanosec = t_ns // NS, t_ns % NS
+    m.vector.x, m.vector.y, m.vector.z = v
+    return serialize_message(m)
+
+
+def state() -> bytes:
+    n = 3
+    m = Float64MultiArray(data=[0.0] * (3 * n) + [0.002] * 3)
+    m.layout.dim = [MultiArrayDimension(label='rows', size=4), MultiArrayDimension(label='n', size=n)]
+    return serialize_message(m)
+
+
+@pytest.fixture(scope='module')
+def bag(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp('s') / 'bag'
+    with BagWriter(path) as w:
+        w.add_topic('/truth/misalignment', 'geometry_msgs/msg/Vector3Stamped')
+        w.add_topic('/alignment/misalignment', 'geometry_msgs/msg/Vector3Stamped')
+        w.add_topic('/alignment/state', 'std_msgs/msg/Float64MultiArray')
+        for k in range(11):
+            t = NS + k * NS // 10
+            w.write('/truth/misalignment', vec(t, TRUTH), t)
+        for k in range(21):
+            t = NS + k * NS // 10
+            w.write('/alignment/misalignment', vec(t, [x + 1e-3 for x in TRUTH]), t)
+            w.write('/alignment/state', state(), t)
+    return path
+
+
+PUBLISHED = {'/truth/misalignment': 11, '/alignment/misalignment': 21, '/alignment/state': 21}
+
+
+def test_a_complete_run(bag):
+    s = summary.summarise(bag, bag, 1.0, 2.0, 4.0, dict(PUBLISHED))
+    assert s['complete'] is True and s['problems'] == []
+    assert s['sim_time_s'] == 2.0 and s['real_time_factor'] == 0.5
+    assert s['scored_at_s'] == pytest.approx(2.0) and s['estimate_stamp_s'] == pytest.approx(2.0)
+    assert s['misalignment_error_rad'] == pytest.approx([1e-3] * 3)
+    assert s['misalignment_sigma_rad'] == [0.002] * 3
+    assert s['lost_total'] == 0 and s['foreign_total'] == 0
+    assert summary.table(s).endswith('complete: yes')
+
+
+def test_lost_and_foreign_messages_make_it_incomplete(bag):
+    pub = dict(PUBLISHED, **{'/truth/misalignment': 13, '/alignment/state': 20})
+    s = summary.summarise(bag, bag, 1.0, 2.0, 4.0, pub)
+    assert s['complete'] is False
+    assert s['lost'] == {'/alignment/misalignment': 0, '/alignment/state': 0, '/truth/misalignment': 2}
+    assert s['foreign'] == {'/alignment/state': 1}
+    assert s['lost_total'] == 2 and s['foreign_total'] == 1
+    text = summary.table(s)
+    assert 'lost messages: 2' in text and 'foreign messages: 1' in text
+    assert text.splitlines()[-1] == 'INCOMPLETE: 2 messages lost; 1 messages more than the run published'
+
+
+def test_a_foreign_publisher_makes_it_incomplete(bag):
+    s = summary.summarise(bag, bag, 1.0, 2.0, 4.0, dict(PUBLISHED),
+                          foreign_publishers={'/alignment/state': ['/intruder']})
+    assert s['complete'] is False
+    assert s['problems'] == ['foreign publisher on /alignment/state: /intruder']
+
+
+def test_the_time_claimed_is_the_one_the_outputs_reached(bag):
+    """Planned 1.0..6.0 s, outputs to 3.0 s: 2.0 s simulated, and the table says of what."""
+    s = summary.summarise(bag, bag, 1.0, 5.0, 4.0, dict(PUBLISHED), problems=['stopped by SIGINT'])
+    assert s['sim_time_s'] == pytest.approx(2.0) and s['planned_sim_time_s'] == 5.0
+    assert s['complete'] is False
+    assert s['problems'] == ['stopped by SIGINT',
+                             'cut short: the filter outputs reached t = 3.00 s of 6.00 s']
+    assert 'sim time 2.00 s of 5.00 s' in summary.table(s)
+
+
+def test_nothing_to_score_is_said_not_raised(tmp_path, bag):
+    empty = tmp_path / 'empty'
+    with BagWriter(empty) as w:
+        w.add_topic('/alignment/misalignment', 'geometry_msgs/msg/Vector3Stamped')
+    s = summary.summarise(empty, empty, 1.0, 2.0, 4.0, {})
+    assert s['complete'] is False and s['misalignment_estimate_rad'] is None
+    assert s['sim_time_s'] == 0.0
+    assert summary.table(s).startswith('misalignment: nothing to score')
