@@ -73,3 +73,33 @@ def test_the_rounded_digest_ignores_the_last_bits_not_the_sixth_digit(tmp_path):
         runs.write_text(f'run,cell,err,updates\n0,"kf, capped",{moved}\n')
         with pytest.raises(publish.StaleResultsError):
             publish.check_fresh('exp', runs, md)
+
+
+def test_redigest_replaces_only_the_digest_of_a_kept_section(tmp_path, monkeypatch):
+    """--redigest NAME: the quick version is re-run and its rounded digest replaces the exact one;
+    the section's text, and every other section, stay as published."""
+    old = '0' * 64
+    md = tmp_path / 'results.md'
+    body_a = f'## A\n\n<a id="a"></a>\ntable a\n<!-- quick-digest a sha256={old} -->\n'
+    body_b = f'## B\n\n<a id="b"></a>\ntable b\n<!-- quick-digest b sha256={old} -->\n'
+    md.write_text('# Results\n\nintro\n\n' + body_a + '\n' + body_b)
+    readme = tmp_path / 'README.md'
+    readme.write_text('readme\n')
+    out = tmp_path / 'out'
+
+    def fake_run(args):
+        quick = out / f'{args[0]}_quick'
+        quick.mkdir(parents=True)
+        (quick / 'runs.csv').write_text('run,err\n0,0.1234567\n')
+    monkeypatch.setattr(publish, 'RESULTS_MD', md)
+    monkeypatch.setattr(publish, 'README', readme)
+    monkeypatch.setattr(publish, 'OUT_DIR', out)
+    monkeypatch.setattr(publish, 'ROOT', tmp_path)
+    monkeypatch.setattr(publish, 'experiments', lambda: {'a': object(), 'b': object()})
+    monkeypatch.setattr(publish, '_run', fake_run)
+    assert publish.main(['--redigest', 'a']) == 0
+    text = md.read_text()
+    new = publish.digest(out / 'a_quick' / 'runs.csv')
+    assert f'<!-- quick-digest a sha256r6={new} -->' in text and 'table a' in text
+    assert body_b.strip() in text
+    publish.check_fresh('a', out / 'a_quick' / 'runs.csv', md)
