@@ -79,7 +79,7 @@ class AlignmentFilterNode(node_util.CountingNode):
         super().__init__('alignment_filter_node')
         self.sc = ScenarioParameters(self, NODE_SCOPES['alignment_filter_node']).scenario
         self.plane = pipeline.plane_of(self.sc)
-        self.engine = TransferAlignment(self.sc.filter, self.plane, self.sc.rate_hz)
+        self.engine = TransferAlignment(self.sc.filter, self.plane, self.sc.rate_hz, keep_history=False)
         self.inputs = FilterInputs(self.engine)
         self.stream_publisher(Vector3Stamped, topics.ALIGN_MISALIGNMENT)
         self.stream_publisher(PoseWithCovarianceStamped, topics.ALIGN_ATTITUDE)

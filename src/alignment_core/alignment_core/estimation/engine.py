@@ -44,7 +44,11 @@ class TransferAlignment(EngineViews):
     """Stamp-ordered transfer-alignment estimator: push samples, call `process`, read `outputs`
     (the read-only views: engine_views.py)."""
 
-    def __init__(self, cfg: FilterConfig, plane: earth.TangentPlane, imu_rate_hz: float) -> None:
+    def __init__(self, cfg: FilterConfig, plane: earth.TangentPlane, imu_rate_hz: float,
+                 keep_history: bool = True) -> None:
+        """keep_history False (a node): `outputs` and `published` keep only the latest estimate,
+        so memory does not grow with the run (process() returns the new ones either way)."""
+        self._keep_history = keep_history
         self._cfg = cfg
         self._plane = plane
         self._model = make_model(cfg)
@@ -142,6 +146,8 @@ class TransferAlignment(EngineViews):
             self._match_pending(final=True)
         new = [self._guard.publish(e, self._prior) for e in self._outputs[n0:]]
         self._published.extend(new)
+        if not self._keep_history:
+            del self._outputs[:-1], self._published[:-1]
         return new
 
     def _prior(self, e: Estimate) -> Estimate:
