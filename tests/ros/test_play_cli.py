@@ -131,7 +131,8 @@ def listen(ros_context: Context):
 
 def test_rate_and_playback_end(bag: Path, listen) -> None:
     """A 2 s bag at -r 2 takes 1 s; --playback-duration 0.6 at the default rate 1.0 plays
-    0.6 s of it; --playback-until-sec keeps the message stamped exactly at the limit."""
+    0.6 s of it; --playback-until-sec keeps the message stamped exactly at the limit (the player
+    gives its readers a second to take the last messages before it leaves)."""
     lst = listen({'/a/imu': Imu, '/b/imu': Imu})
     rc, stats, err = lst.play(bag, '-r', '2', '--topics', '/a/imu')
     assert rc == 0, err

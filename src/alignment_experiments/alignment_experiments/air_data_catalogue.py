@@ -72,6 +72,17 @@ SEED004_TABLES = AirDataExperiment(
             PaperClaim('beta_rad', 0.1 / 57.29577951308232, 0.47)),
     quick_base=(('duration_s', 300.0),),
     quick_cells=('paper ekf', 'tight ckf'),
+    notes=("The paper's form gives the same numbers as EKF, UKF and CKF: given the INS attitude its "
+           "process and measurement are linear in the state, so the CKF's 39 % / 47 % cut of the maximum "
+           "errors cannot come from this model (our cut: 0 %). It is inconsistent (NEES far above its "
+           "bounds) because it treats the ports as white and instantaneous: their noise is correlated and "
+           "they lag, so its estimate trails the alpha sweeps. The tightly coupled form models both and is "
+           "a little conservative; over the Mach 7 cruise it meets 0.02 deg and Mach 0.003 with a wide "
+           "margin, and its Mach error stays inside the paper's 0.01 over the whole profile. Its worst "
+           "alpha and beta errors come in the first seconds at Mach 0.1 near the ground, where one frame's "
+           "Cramer-Rao bound is 1.5 deg and the filter has had a handful of correlated frames: there they "
+           "reach about 2.5x (alpha) and 1.9x (beta) that bound, beyond the 1.5x goal. The EKF and CKF "
+           "of the tight form differ by a few per cent only: the port model is smooth over one sigma."),
 )
 
 AIR_DATA_GOAL = AirDataExperiment(
@@ -94,6 +105,15 @@ AIR_DATA_GOAL = AirDataExperiment(
     wind_after_s=700.0,
     fault_at_s=550.0,
     quick_base=(('duration_s', 620.0),),
+    notes=("Nominal: the wind after the first turn meets 0.5 m/s (east at the limit) with an honest "
+           "sigma (NEES inside its bounds), Mach to 0.001. Alpha and beta come out at 0.104 deg RMS, just "
+           "above the 0.1 goal: the limit is the pneumatic lag in moderate turbulence, the gusts inside each "
+           "port's lag window that no state can know (modelled as measurement noise, which keeps the "
+           "NEES honest; without a lag the same filter gives half the error). The blocked port is found "
+           "in every run but after 18 s (median), not 2 s: a frozen port is only wrong as the flow "
+           "changes, the bottom and top ports of a meridian explain each other's fault until one is "
+           "clearly the culprit, and the gate refuses frames meanwhile; over the run the errors of that "
+           "cell are 2.2x (alpha) and 2.3x (wind) the nominal ones, above the 2x goal."),
 )
 
 AIR_DATA_EXPERIMENTS = {e.name: e for e in (SEED004_TABLES, AIR_DATA_GOAL)}

@@ -192,10 +192,13 @@ class Playback:
             self.counts[topic] += 1
 
     def wait_acked(self) -> bool | None:
-        """``--wait-for-all-acked``: None when not asked, else whether every message was acked."""
+        """``--wait-for-all-acked``: None when not asked, else whether every message was acked.
+        Not asked, the player still gives its reliable readers up to FINAL_ACK_S to take the last
+        messages before it leaves (ros2 bag play may exit with them in flight)."""
         timeout_ms = self.args.wait_for_all_acked
-        if timeout_ms < 0:
-            return None
+        asked = timeout_ms >= 0
+        if not asked:
+            timeout_ms = int(FINAL_ACK_S * 1000)
         deadline = None if timeout_ms == 0 else time.monotonic() + timeout_ms / 1000
         acked = True
         for topic, pub in self.pubs.items():
@@ -204,11 +207,15 @@ class Playback:
             left = Duration(seconds=-1) if deadline is None else Duration(
                 nanoseconds=int(max(0.0, deadline - time.monotonic()) * NS))
             if not pub.wait_for_all_acked(left):
-                log.error('Timed out while waiting for all published messages to be acknowledged '
-                          'for topic %s', topic)
+                if asked:
+                    log.error('Timed out while waiting for all published messages to be acknowledged '
+                              'for topic %s', topic)
                 acked = False
-        return acked
+        return acked if asked else None
 
+
+
+FINAL_ACK_S = 1.0
 
 
 def _sleep(seconds: float, stop: dict[str, bool]) -> bool:
