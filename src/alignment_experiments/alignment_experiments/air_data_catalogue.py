@@ -71,7 +71,9 @@ SEED004_TABLES = AirDataExperiment(
     claims=(PaperClaim('mach', 0.01), PaperClaim('alpha_rad', 0.1 / 57.29577951308232, 0.39),
             PaperClaim('beta_rad', 0.1 / 57.29577951308232, 0.47)),
     quick_base=(('duration_s', 300.0),),
-    quick_cells=('paper ekf', 'tight ckf'),
+    # the quick version (the suite's freshness check) runs the tight form only: the paper form's
+    # gate sits near its NIS often enough that another CPU's last bits flip one update
+    quick_cells=('tight ckf',),
     notes=("The paper's form gives the same numbers as EKF, UKF and CKF: given the INS attitude its "
            "process and measurement are linear in the state, so the CKF's 39 % / 47 % cut of the maximum "
            "errors cannot come from this model (our cut: 0 %). It is inconsistent (NEES far above its "
