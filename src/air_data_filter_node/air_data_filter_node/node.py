@@ -34,8 +34,11 @@ from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
 from .inputs import FrameAssembler, ImuBlocks, StampOrder
 
-MAX_WAIT_S = 5.0
-"""An input waits for the other streams at most this long (in stamp time) before it is processed."""
+MAX_WAIT_S = 300.0
+"""An input waits for the other streams at most this long (in stamp time) before it is processed
+(then the stream behind is taken as silent). As fast as possible (real-time factor 0) a reliable
+stream can trail another by thousands of messages (tens of seconds of stamps): a short wait
+would process frames before their INS and break graph == batch."""
 INS, IMU, FRAME = 'ins', 'imu', 'frame'
 
 
