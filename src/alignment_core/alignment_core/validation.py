@@ -93,3 +93,31 @@ def to_dict(obj) -> dict:
 def require(cond: bool, msg: str) -> None:
     if not cond:
         raise ConfigError(msg)
+
+
+def keyed_items(text: str, label: str, noun: str, allowed: dict[str, tuple[str, ...]]
+                ) -> list[tuple[str, str, dict[str, float]]]:
+    """Parse 'kind key=value ...' items separated by ';' or new lines into (where, kind, values),
+    `where` naming the item for error messages (label[i] (item)); kinds and their keys from
+    `allowed`; values finite numbers, each key at most once. ConfigError names the problem."""
+    items = [p.strip() for p in text.replace('\n', ';').split(';')]
+    out = []
+    for i, item in enumerate(p for p in items if p):
+        where = f"{label}[{i}] ({item!r})"
+        kind, *pairs = item.split()
+        require(kind in allowed, f"{where}: unknown {noun} {kind!r} (allowed: {', '.join(allowed)})")
+        vals: dict[str, float] = {}
+        for p in pairs:
+            key, sep, val = p.partition('=')
+            require(bool(sep) and bool(key) and bool(val), f"{where}: expected key=value, got {p!r}")
+            require(key in allowed[kind],
+                    f"{where}: unknown key {key!r} for {kind} (allowed: {', '.join(allowed[kind])})")
+            require(key not in vals, f"{where}: {key} given twice")
+            try:
+                x = float(val)
+            except ValueError:
+                raise ConfigError(f"{where}: {key} must be a number, got {val!r}") from None
+            require(math.isfinite(x), f"{where}: {key} must be finite, got {val!r}")
+            vals[key] = x
+        out.append((where, kind, vals))
+    return out

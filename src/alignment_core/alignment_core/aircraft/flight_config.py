@@ -2,11 +2,10 @@
 parsing and checks."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Literal
 
-from alignment_core.validation import ConfigError, require
+from alignment_core.validation import keyed_items, require
 
 SEGMENT_KINDS = ('level', 'climb', 'turn')
 VERTICAL_KEYS = ('climb_rate_mps', 'flight_path_deg', 'pitch_deg')
@@ -39,29 +38,12 @@ class FlightSegment:
 
 def parse_segments(text: str) -> tuple[FlightSegment, ...]:
     """Parse and check a segment string; ConfigError names the segment and the problem."""
-    items = [p.strip() for p in text.replace('\n', ';').split(';')]
-    items = [p for p in items if p]
+    items = keyed_items(text, 'segments', 'segment type', {k: ALLOWED_KEYS[k] for k in SEGMENT_KINDS})
+    last = items[-1][0] if items else ''
     out = []
-    for i, item in enumerate(items):
-        where = f"segments[{i}] ({item!r})"
-        kind, *pairs = item.split()
-        require(kind in SEGMENT_KINDS,
-                f"{where}: unknown segment type {kind!r} (allowed: {', '.join(SEGMENT_KINDS)})")
-        vals: dict[str, float] = {}
-        for p in pairs:
-            key, sep, val = p.partition('=')
-            require(bool(sep) and bool(key) and bool(val), f"{where}: expected key=value, got {p!r}")
-            require(key in ALLOWED_KEYS[kind],
-                    f"{where}: unknown key {key!r} for {kind} (allowed: {', '.join(ALLOWED_KEYS[kind])})")
-            require(key not in vals, f"{where}: {key} given twice")
-            try:
-                v = float(val)
-            except ValueError:
-                raise ConfigError(f"{where}: {key} must be a number, got {val!r}") from None
-            require(math.isfinite(v), f"{where}: {key} must be finite, got {val!r}")
-            vals[key] = v
+    for where, kind, vals in items:
         seg = FlightSegment(kind=kind, **vals)
-        _check_segment(seg, where, last=(i == len(items) - 1))
+        _check_segment(seg, where, last=(where == last))
         out.append(seg)
     return tuple(out)
 

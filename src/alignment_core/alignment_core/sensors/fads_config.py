@@ -11,13 +11,12 @@ e.g. "blocked port=2 at_s=500; bias_step port=1 at_s=300 pa=200; noise port=3 at
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 from alignment_core.air_data.atmosphere import DayOffsets
 from alignment_core.air_data.ports import EpsilonCalibration, PortGeometry, PortModel
 from alignment_core.aircraft.wind import WindConfig
-from alignment_core.validation import ConfigError, require
+from alignment_core.validation import keyed_items, require
 
 FAULT_KINDS = ('blocked', 'bias_step', 'noise')
 FAULT_KEYS = {'blocked': ('port', 'at_s'), 'bias_step': ('port', 'at_s', 'pa'),
@@ -37,25 +36,8 @@ class FadsFault:
 
 def parse_faults(text: str, n_ports: int) -> tuple[FadsFault, ...]:
     """Parse and check a fault string; ConfigError names the fault and the problem."""
-    items = [p.strip() for p in text.replace('\n', ';').split(';')]
     out: list[FadsFault] = []
-    for i, item in enumerate(p for p in items if p):
-        where = f"faults[{i}] ({item!r})"
-        kind, *pairs = item.split()
-        require(kind in FAULT_KINDS, f"{where}: unknown fault {kind!r} (allowed: {', '.join(FAULT_KINDS)})")
-        vals: dict[str, float] = {}
-        for p in pairs:
-            key, sep, val = p.partition('=')
-            require(bool(sep) and bool(key) and bool(val), f"{where}: expected key=value, got {p!r}")
-            require(key in FAULT_KEYS[kind],
-                    f"{where}: unknown key {key!r} for {kind} (allowed: {', '.join(FAULT_KEYS[kind])})")
-            require(key not in vals, f"{where}: {key} given twice")
-            try:
-                v = float(val)
-            except ValueError:
-                raise ConfigError(f"{where}: {key} must be a number, got {val!r}") from None
-            require(math.isfinite(v), f"{where}: {key} must be finite, got {val!r}")
-            vals[key] = v
+    for where, kind, vals in keyed_items(text, 'faults', 'fault', {k: FAULT_KEYS[k] for k in FAULT_KINDS}):
         missing = [k for k in FAULT_KEYS[kind] if k not in vals]
         require(not missing, f"{where}: {kind} needs {', '.join(missing)}")
         port = vals.pop('port')
