@@ -1,10 +1,19 @@
 """Replay a recorded run's sensor topics (and /clock) into a fresh alignment filter node,
 record its outputs to a new bag, and write the same summary.json as run_graph.
 
-Played: /clock, /master/odom, /aircraft/imu, /ldv/twist, and /doppler/twist when the bag has
-it (recorded only with doppler.enabled); the player waits for the filter's subscription to it
-when the filter's model matches the Doppler radar (filter.model, as the filter node resolves
-its parameters from the params file). The recording ends as run_graph's does: once the filter's
+Played: /clock, /master/odom, /aircraft/imu, and /ldv/twist and /doppler/twist when the bag
+has them (an imported log may have neither; /doppler/twist is recorded only with
+doppler.enabled); the player waits for the filter's subscription to each played input (to
+/doppler/twist when the filter's model matches the Doppler radar: filter.model, as the filter
+node resolves its parameters).
+
+Parameters: the run's params.yaml next to the bag, or --params-file, with --set KEY=VALUE
+overrides (as run_graph's); the world origin and the IMU rate come from the data where none
+of them gives them (alignment_ros.replay_params). The parameters used are written to the
+output's params.yaml. A bag without /truth/misalignment (a real recording) is summarised
+without truth: the estimate and its 1-sigma at the filter's last output, said so.
+
+The recording ends as run_graph's does: once the filter's
 outputs reached the input's end, the filter is stopped and the recorder records every message
 it reports having published (no idle timeout cuts it).
 
@@ -26,8 +35,9 @@ import rclpy
 from rclpy.signals import SignalHandlerOptions
 
 from alignment_core.estimation.models import DOPPLER_MODELS
+from alignment_core.validation import ConfigError
 
-from . import bag_reindex, summary, topics
+from . import bag_reindex, replay_params, summary, topics
 from .bag import BagError, BagReader
 from .graph import start
 from .launch import (
@@ -41,7 +51,7 @@ from .launch import (
     start_recorder,
     watch_end_time,
 )
-from .params import NODE_SCOPES, node_scenario, params_file_given
+from .params import NODE_SCOPES, node_scenario
 from .shm_cleanup import clean_stale
 from .signals import Interrupted, SignalGuard
 from .topics import FILTER_OUTPUT_TOPICS, SENSOR_TOPICS
@@ -70,15 +80,15 @@ def _wait_graph(timeout_s: float = 30.0) -> None:
         rclpy.shutdown()
 
 
-def replay_topics(bag_topics, params: Path) -> tuple[list[str], list[str]]:
-    """(topics to play, 'TOPIC=N' subscriptions to wait for): the sensor topics, plus the
-    Doppler radar's when the bag has it; its subscriber is awaited only if the filter's model
-    uses it (the filter node subscribes only then)."""
-    play = list(SENSOR_TOPICS)
-    wait = [f'{topics.AIRCRAFT_IMU}=1', f'{topics.MASTER_ODOM}=1', f'{topics.LDV_TWIST}=1']
+def replay_topics(bag_topics, given: dict) -> tuple[list[str], list[str]]:
+    """(topics to play, 'TOPIC=N' subscriptions to wait for): the sensor topics the bag has,
+    plus the Doppler radar's when it has it; its subscriber is awaited only if the filter's
+    model uses it (the filter node subscribes only then). `given`: the filter's parameters."""
+    play = [t for t in SENSOR_TOPICS if t in bag_topics]
+    wait = [f'{t}=1' for t in (topics.AIRCRAFT_IMU, topics.MASTER_ODOM, topics.LDV_TWIST) if t in bag_topics]
     if topics.DOPPLER_TWIST in bag_topics:
         play.append(topics.DOPPLER_TWIST)
-        sc = node_scenario(params_file_given(params, FILTER), NODE_SCOPES[FILTER])
+        sc = node_scenario(given, NODE_SCOPES[FILTER])
         if sc.filter.model in DOPPLER_MODELS:
             wait.append(f'{topics.DOPPLER_TWIST}=1')
     return play, wait
@@ -90,7 +100,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument('bag', type=Path, help='a bag recorded by run_graph.sh (its run directory or bag/)')
     ap.add_argument('--out', type=Path, default=None)
     ap.add_argument('--params-file', type=Path, default=None,
-                    help="filter parameters (default: the run's params.yaml next to the bag)")
+                    help="filter parameters (default: the run's params.yaml next to the bag, if any)")
+    ap.add_argument('--set', dest='sets', action='append', default=[], metavar='KEY=VALUE',
+                    help='a scenario key for the filter, as run_graph.sh --set (repeatable)')
     ap.add_argument('--domain-id', type=domain_id, default=None,
                     help='ROS_DOMAIN_ID for the replay (default: the exported ROS_DOMAIN_ID, else a '
                          'free one; printed at the start)')
@@ -101,15 +113,19 @@ def main(argv: list[str] | None = None) -> int:
     return guarded_main('replay', _main, parse_args(argv))
 
 
-def _input(bag: Path, params: Path) -> tuple[bag_reindex.Reindexed | None, int, int, list, list]:
-    """(repair done, first and last stamp the replay covers, topics to play, to wait for)."""
+def _input(bag: Path, given: dict) -> tuple[bag_reindex.Reindexed | None, int, int, list, list, bool]:
+    """(repair done, first and last stamp the replay covers, topics to play, to wait for,
+    whether the bag has the misalignment's truth)."""
     repaired = bag_reindex.repair_if_damaged(bag) if bag.is_dir() else None
     if bag.is_file() and not bag_reindex.file_intact(bag):
         # a lone .mcap file cut short: read as far as it goes (a repair needs a bag directory)
         logging.getLogger('alignment_ros.bag').setLevel(logging.ERROR)   # said once, by main
         repaired = bag_reindex.Reindexed(bag, 'a .mcap file without a valid summary (cut short?)')
     reader = BagReader(bag)
-    play, wait = replay_topics(reader.topics(), params)
+    bag_topics = reader.topics()
+    if topics.AIRCRAFT_IMU not in bag_topics:
+        raise BagError(f'{bag}: no {topics.AIRCRAFT_IMU} topic')
+    play, wait = replay_topics(bag_topics, given)
     inputs = {topics.AIRCRAFT_IMU, topics.MASTER_ODOM, topics.LDV_TWIST}
     if f'{topics.DOPPLER_TWIST}=1' in wait:
         inputs.add(topics.DOPPLER_TWIST)
@@ -122,26 +138,31 @@ def _input(bag: Path, params: Path) -> tuple[bag_reindex.Reindexed | None, int, 
         raise BagError(f'{bag}: no {topics.MASTER_ODOM} messages')
     # a cut input: its streams end at different stamps, the filter's outputs at the earliest
     end_ns = min(last.values()) if repaired is not None else last[topics.MASTER_ODOM]
-    return repaired, first[topics.MASTER_ODOM], end_ns, play, wait
+    return repaired, first[topics.MASTER_ODOM], end_ns, play, wait, topics.TRUTH_MISALIGNMENT in bag_topics
 
 
 def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
     bag = a.bag / 'bag' if (a.bag / 'bag').is_dir() else a.bag
-    params = a.params_file or bag.parent / 'params.yaml'
-    if not params.exists():
-        print(f'replay: no parameters at {params}; pass --params-file', file=sys.stderr)
+    params_in = a.params_file or (bag.parent / 'params.yaml' if (bag.parent / 'params.yaml').exists() else None)
+    if params_in is not None and not params_in.exists():
+        print(f'replay: no parameters at {params_in}', file=sys.stderr)
         return 2
     out = a.out or root() / 'runs' / time.strftime('replay-%Y%m%d-%H%M%S')
     if (out / 'bag').exists():
         print(f'replay: {out}/bag already exists', file=sys.stderr)
         return 2
     try:
-        repaired, start_ns, end_ns, play, wait = _input(bag, params)
-    except (BagError, ValueError, OSError) as e:
+        given, notes = replay_params.replay_parameters(bag, params_in, a.sets)
+        repaired, start_ns, end_ns, play, wait, has_truth = _input(bag, given)
+    except (BagError, ConfigError, ValueError, OSError) as e:
         print(f'replay: {e}', file=sys.stderr)
         return 2
+    for line in notes:
+        print(f'replay: {line}', file=sys.stderr)
     for d in ('logs', 'stats'):
         (out / d).mkdir(parents=True, exist_ok=True)
+    params = out / 'params.yaml'
+    replay_params.write_params(given, params)
     run = Run('replay', out, guard)
     if repaired is not None and bag.is_dir():
         print(f'replay: input bag repaired: {repaired.line()}', file=sys.stderr)
@@ -158,7 +179,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
         s = summary.summarise(bag, out / 'bag', start_ns * 1e-9, (end_ns - start_ns) * 1e-9, wall,
                               published_counts(out, with_held=True),
                               run.foreign_publishers({FILTER}), run.problems,
-                              published_known=not run.unknown_counts())
+                              published_known=not run.unknown_counts(), truth=has_truth)
         s['replayed_from'] = str(bag)
         summary.write(s, out)
     except (BagError, OSError) as e:

@@ -5,6 +5,10 @@ is published only then); the estimate scored is the filter's output at the last 
 (the release, or the end of a deck run), or the latest output before it. A summary says
 whether the run is complete (``complete``, ``problems``): a lost message, a foreign one, a run
 cut short or anything the launcher saw go wrong makes it incomplete (and the exit non-zero).
+
+Without truth (a replay of a real recording: no /truth/misalignment in its input), the summary
+gives the estimate and its 1-sigma at the filter's last output, truth and error None, and
+``truth: false`` (the key is absent otherwise); the table says so.
 """
 from __future__ import annotations
 
@@ -55,16 +59,18 @@ def truth_from_bag(bag: Path) -> tuple[int, np.ndarray]:
 def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: float,
               wall_time_s: float, published: dict[str, int] | None = None,
               foreign_publishers: dict[str, list[str]] | None = None,
-              problems: list[str] | None = None, published_known: bool = True) -> dict:
+              problems: list[str] | None = None, published_known: bool = True,
+              truth: bool = True) -> dict:
     """The summary of a run of `duration_s` simulated seconds from `start_s`: the score (None
     when there is nothing to score), counts, losses, foreign messages, and whether the run is
     complete (no message lost or foreign, outputs up to the end, no `problems` the launcher
     saw). The simulated time claimed is the one the filter's outputs reached; published_known
-    False: some publishers' counts are missing (more may be lost than `lost` says)."""
+    False: some publishers' counts are missing (more may be lost than `lost` says); `truth`
+    False: the input has no truth (the last estimate and its 1-sigma are reported instead)."""
     est = estimates_from_bag(estimate_bag)
     problems = list(problems or [])
     air = air_data_summary.score(estimate_bag)
-    score = _score(truth_bag, est, problems, optional=air is not None)
+    score = _score(truth_bag, est, problems, optional=air is not None) if truth else _estimate_only(est, problems)
     own = topic_counts(estimate_bag)
     counts = {**topic_counts(truth_bag), **own} if Path(truth_bag) != Path(estimate_bag) else own
     pub = published or {}
@@ -86,6 +92,7 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
         problems.append(f'foreign publisher on {topic}: {", ".join(names)}')
     return {
         **score,
+        **({} if truth else {'truth': False}),     # the key only where there is none
         'air_data': air,
         'sim_time_s': reached,
         'planned_sim_time_s': duration_s,
@@ -127,9 +134,28 @@ def _score(truth_bag: Path, est: dict[str, np.ndarray], problems: list[str], opt
     }
 
 
+def _estimate_only(est: dict[str, np.ndarray], problems: list[str]) -> dict:
+    """The filter's last estimate and its 1-sigma (no truth to score them against)."""
+    out = dict.fromkeys(SCORE_KEYS)
+    if not len(est['t_ns']):
+        problems.append('no filter output')
+        return out
+    out.update(misalignment_estimate_rad=est['misalignment'][-1].tolist(),
+               misalignment_sigma_rad=est['sigma'][-1].tolist(),
+               estimate_stamp_s=int(est['t_ns'][-1]) * 1e-9)
+    return out
+
+
 def table(s: dict) -> str:
     lines = []
-    if s.get('misalignment_truth_rad') is not None:
+    if s.get('truth') is False and s.get('misalignment_estimate_rad') is not None:
+        est, sig = np.array(s['misalignment_estimate_rad']), np.array(s['misalignment_sigma_rad'])
+        lines += [f"misalignment at t = {s['estimate_stamp_s']:.2f} s, no truth in the input: estimate "
+                  f"and 1 sigma only (aircraft FLU axes, arcmin)",
+                  f"{'axis':<10}{'estimate':>10}{'1 sigma':>10}"]
+        for k, name in enumerate(('x (roll)', 'y (pitch)', 'z (yaw)')):
+            lines.append(f"{name:<10}{est[k] / ARCMIN:>10.3f}{sig[k] / ARCMIN:>10.3f}")
+    elif s.get('misalignment_truth_rad') is not None:
         mu, est = np.array(s['misalignment_truth_rad']), np.array(s['misalignment_estimate_rad'])
         sig = np.array(s['misalignment_sigma_rad'])
         head = f"misalignment at t = {s['scored_at_s']:.2f} s"
