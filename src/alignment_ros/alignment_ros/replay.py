@@ -113,14 +113,16 @@ def main(argv: list[str] | None = None) -> int:
     return guarded_main('replay', _main, parse_args(argv))
 
 
-def _input(bag: Path, given: dict) -> tuple[bag_reindex.Reindexed | None, int, int, list, list, bool]:
+def _input(bag: Path, params_in: Path | None, sets: list[str]) -> tuple[
+        bag_reindex.Reindexed | None, int, int, list, list, bool, dict, list[str]]:
     """(repair done, first and last stamp the replay covers, topics to play, to wait for,
-    whether the bag has the misalignment's truth)."""
+    whether the bag has the misalignment's truth, the filter's parameters, notes on them)."""
     repaired = bag_reindex.repair_if_damaged(bag) if bag.is_dir() else None
     if bag.is_file() and not bag_reindex.file_intact(bag):
         # a lone .mcap file cut short: read as far as it goes (a repair needs a bag directory)
         logging.getLogger('alignment_ros.bag').setLevel(logging.ERROR)   # said once, by main
         repaired = bag_reindex.Reindexed(bag, 'a .mcap file without a valid summary (cut short?)')
+    given, notes = replay_params.replay_parameters(bag, params_in, sets)
     reader = BagReader(bag)
     bag_topics = reader.topics()
     if topics.AIRCRAFT_IMU not in bag_topics:
@@ -138,7 +140,8 @@ def _input(bag: Path, given: dict) -> tuple[bag_reindex.Reindexed | None, int, i
         raise BagError(f'{bag}: no {topics.MASTER_ODOM} messages')
     # a cut input: its streams end at different stamps, the filter's outputs at the earliest
     end_ns = min(last.values()) if repaired is not None else last[topics.MASTER_ODOM]
-    return repaired, first[topics.MASTER_ODOM], end_ns, play, wait, topics.TRUTH_MISALIGNMENT in bag_topics
+    return (repaired, first[topics.MASTER_ODOM], end_ns, play, wait, topics.TRUTH_MISALIGNMENT in bag_topics,
+            given, notes)
 
 
 def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
@@ -152,8 +155,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
         print(f'replay: {out}/bag already exists', file=sys.stderr)
         return 2
     try:
-        given, notes = replay_params.replay_parameters(bag, params_in, a.sets)
-        repaired, start_ns, end_ns, play, wait, has_truth = _input(bag, given)
+        repaired, start_ns, end_ns, play, wait, has_truth, given, notes = _input(bag, params_in, a.sets)
     except (BagError, ConfigError, ValueError, OSError) as e:
         print(f'replay: {e}', file=sys.stderr)
         return 2
