@@ -4,8 +4,9 @@ level or inside functions, absolute or relative):
 - layering: geometry, navigation and estimation never import the simulator (ship, aircraft,
   sensors, config, pipeline, evaluation); nor do the foundation modules (units, validation,
   gauss_markov, rng, samples); geometry imports neither navigation nor estimation, navigation
-  not estimation; air_data (atmosphere, pitot, ports, FADS solve: shared by the simulator and
-  the estimator, so geometry, navigation and estimation may import it) imports only units,
+  not estimation; recorded (logs in) neither the simulator nor navigation and estimation;
+  air_data (atmosphere, pitot, ports, FADS solve: shared by the simulator and the estimator,
+  so geometry, navigation and estimation may import it) imports only units,
   validation and geometry of the package, and numpy, scipy, ambiance and the standard library;
 - no import cycle among alignment_core's modules (a package's __init__ is a module);
 - alignment_core never imports rclpy, ROS message packages or the ROS glue.
@@ -31,6 +32,7 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
     'navigation': SIMULATOR + ('estimation',),
     'estimation': SIMULATOR,
     'air_data': SIMULATOR + ('navigation', 'estimation', 'gauss_markov', 'rng', 'samples'),
+    'recorded': SIMULATOR + ('navigation', 'estimation'),     # recorded logs in: no simulator
     **{name: SIMULATOR for name in FOUNDATION},
 }
 AIR_DATA_MAY_IMPORT = ('air_data', 'units', 'validation', 'geometry')

@@ -152,3 +152,17 @@ def test_ldv_rows_without_a_measurement(logs, tmp_path):
     assert v.v[1] == pytest.approx([0, 0, 0]) and np.isnan(v.sigma[1])
     v = recorded.load(*logs, ldv=ldv, layout_map={'ldv': {'sigma': 0.02}}).ldv
     assert v.sigma == pytest.approx([0.02, 0.02]) and v.report.skipped == 2
+
+
+def test_the_maps_of_the_docs_are_valid():
+    import re
+    from pathlib import Path
+
+    import yaml
+
+    from alignment_core.recorded.layout import read_map
+    text = (Path(__file__).resolve().parents[2] / 'docs/own-data.md').read_text()
+    blocks = re.findall(r'```yaml\n(.*?)```', text, re.S)
+    assert len(blocks) == 3
+    for b in blocks:
+        read_map(yaml.safe_load(b))
