@@ -138,3 +138,19 @@ def test_a_bag_without_ldv_plays_what_it_has():
     play, wait = replay_topics({topics.CLOCK: '', topics.MASTER_ODOM: '', topics.AIRCRAFT_IMU: ''}, {})
     assert topics.LDV_TWIST not in play and f'{topics.LDV_TWIST}=1' not in wait
     assert set(play) == {topics.CLOCK, topics.MASTER_ODOM, topics.AIRCRAFT_IMU}
+
+
+def test_a_doppler_log_becomes_its_topic(run, tmp_path):
+    sc, inp, _ = run
+    write_canonical(tmp_path, sc, inp)
+    (tmp_path / 'doppler.csv').write_text('t_s,v_x_mps,v_y_mps,v_z_mps,sigma_mps\n'
+                                          '1.5,0.1,0.2,0.3,0.05\n1.6,,,,-1\n1.7,0.1,0.2,0.3,0.05\n')
+    assert importer.main(['--imu', str(tmp_path / 'imu.csv'), '--master', str(tmp_path / 'master.csv'),
+                          '--doppler', str(tmp_path / 'doppler.csv'), '--out', str(tmp_path / 'bag')]) == 0
+    msgs = [deserialize_message(m.data, topics.msg_class(m.type_name))
+            for m in BagReader(tmp_path / 'bag').messages([topics.DOPPLER_TWIST])]
+    assert [m.header.frame_id for m in msgs] == [topics.FRAME_AIRCRAFT] * 3
+    d = [convert.msg_to_doppler(m) for m in msgs]
+    assert [s.valid for s in d] == [True, False, True] and d[0].sigma == pytest.approx(0.05)
+    assert list(d[2].v_b) == [0.1, 0.2, 0.3] and d[0].t_ns == 1_500_000_000
+    assert topics.LDV_TWIST not in BagReader(tmp_path / 'bag').topics()
