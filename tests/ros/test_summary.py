@@ -101,3 +101,14 @@ def test_nothing_to_score_is_said_not_raised(tmp_path, bag):
     assert s['complete'] is False and s['misalignment_estimate_rad'] is None
     assert s['sim_time_s'] == 0.0
     assert summary.table(s).startswith('misalignment: nothing to score')
+
+
+def test_without_truth_the_last_estimate_and_its_sigma(bag):
+    s = summary.summarise(bag, bag, 1.0, 2.0, 4.0, dict(PUBLISHED), truth=False)
+    assert s['truth'] is False and s['complete'] is True
+    assert s['misalignment_truth_rad'] is None and s['misalignment_error_rad'] is None
+    assert s['misalignment_estimate_rad'] == pytest.approx([x + 1e-3 for x in TRUTH])
+    assert s['misalignment_sigma_rad'] == [0.002] * 3 and s['estimate_stamp_s'] == pytest.approx(3.0)
+    t = summary.table(s)
+    assert 'no truth in the input: estimate and 1 sigma only' in t and 'truth' not in t.split('\n')[1]
+    assert 'truth' not in summary.summarise(bag, bag, 1.0, 2.0, 4.0, dict(PUBLISHED))   # the key only then
