@@ -90,7 +90,7 @@ class _Reader:
         self.report = StreamReport(str(path))
         self.cols: dict[str, np.ndarray] = {}
 
-    def take(self, key: str, n: int | None = 3, optional_nan: np.ndarray | None = None) -> None:
+    def take(self, key: str, n: int | None = 3) -> None:
         """Read the columns of layout key `key` (`n` of them, or one when None)."""
         refs = self.lay[key]
         if n is None:
@@ -184,7 +184,10 @@ def _attitude(r: _Reader, lay: dict[str, Any], c: dict[str, np.ndarray]) -> np.n
 
 def read_master(path: Path, lay: dict[str, Any]) -> MasterLog:
     r = _Reader('master', path, lay)
-    r.take('quaternion', 4) if lay['attitude'] == 'quaternion' else r.take('euler')
+    if lay['attitude'] == 'quaternion':
+        r.take('quaternion', 4)
+    else:
+        r.take('euler')
     r.take('velocity')
     r.take('position')
     if lay['body_rate'] is not None:

@@ -116,7 +116,7 @@ class Table:
 def read_csv(path: Path, header: bool = True, delimiter: str | None = None) -> Table:
     """A CSV (or whitespace-separated) file; lines starting with '#' are comments. With
     `header`, the first line is the column names (an error if it holds only numbers)."""
-    text = Path(path).read_text()
+    text = Path(path).read_text(encoding='utf-8-sig')     # a spreadsheet's byte-order mark dropped
     numbered = [(i + 1, ln) for i, ln in enumerate(text.splitlines())
                 if ln.strip() and not ln.lstrip().startswith('#')]
     if not numbered:
