@@ -121,6 +121,9 @@ def test_other_bad_files(logs, tmp_path):
         recorded.load(*logs, layout_map={'imu': {'kind': 'rates', 'gyro_unit': 'g'}})
     with pytest.raises(LogError, match='latitude beyond 90 deg'):
         recorded.load(*logs, layout_map={'master': {'position_unit': 'rad'}})
+    imu0 = write(tmp_path / 'i0.csv', IMU_HEAD, imu_rows(t0=345600.0))
+    with pytest.raises(LogError, match='imu times 345600.01 .. 345600.2 s and master times 1 .. 1.2 s do not overlap'):
+        recorded.load(imu0, logs[1])
     with pytest.raises(LogError, match='no such file'):
         recorded.load(tmp_path / 'none.csv', logs[1])
 

@@ -109,6 +109,7 @@ def test_round_trip_reproduces_the_estimates(run, tmp_path, layout):
     meta = BagReader(bag).metadata().custom_data
     assert meta[importer.TIME_OFFSET] == ('0' if layout == 'canonical' else str(sc.t0_ns))
     assert float(meta[importer.IMU_RATE]) == sc.rate_hz
+    assert meta['import.imu_rows'] == str(len(inp.imu)) and meta['import.master_rows_skipped_nan'] == '0'
     counts = BagReader(bag).counts()
     assert counts[topics.AIRCRAFT_IMU] == len(inp.imu) and counts[topics.LDV_TWIST] == len(inp.ldv)
     f = align_bag(bag, sc)

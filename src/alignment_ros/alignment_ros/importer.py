@@ -75,6 +75,10 @@ def write_bag(log: recorded.RecordedLog, origin: tuple[float, float], out: Path,
               META + 'master_body_rate': 'derived from attitude differences' if log.master.rate_derived
               else 'from the log',
               **{META + k + '_log': v for k, v in sources.items()}}
+    for name, st in (('imu', log.imu), ('master', log.master), ('ldv', log.ldv), ('doppler', log.doppler)):
+        if st is not None:
+            custom[f'{META}{name}_rows'] = str(st.report.rows)
+            custom[f'{META}{name}_rows_skipped_nan'] = str(st.report.skipped)
     with BagWriter(out, custom_data=custom) as w:
         for t in (topics.CLOCK, topics.MASTER_ODOM, topics.MASTER_FIX, topics.AIRCRAFT_IMU):
             w.add_topic(t, topics.TOPIC_TYPES[t])

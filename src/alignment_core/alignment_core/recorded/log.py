@@ -48,6 +48,7 @@ def load(imu: Path, master: Path, ldv: Path | None = None, doppler: Path | None 
         'doppler': read_velocity('doppler', Path(doppler), lay['doppler']) if doppler is not None else None,
     }
     given = [s for s in streams.values() if s is not None]
+    _check_overlap({k: s for k, s in streams.items() if s is not None})
     if offset == 'auto':
         first = min(int(s.t_ns[0]) for s in given)
         offset_ns = START_NS - first if first <= 0 else 0
@@ -59,6 +60,18 @@ def load(imu: Path, master: Path, ldv: Path | None = None, doppler: Path | None 
             raise LogError(f'{s.report.source}: stamps at or below 0 after the time offset '
                            f'{offset_ns * 1e-9:g} s (first {s.t_ns[0] * 1e-9:g} s)')
     return RecordedLog(streams['imu'], streams['master'], streams['ldv'], streams['doppler'], offset_ns)
+
+
+def _check_overlap(streams: dict[str, Any]) -> None:
+    """LogError when two streams' time spans do not overlap (different time bases: one absolute,
+    one from 0, or another unit)."""
+    spans = {k: (int(s.t_ns[0]), int(s.t_ns[-1])) for k, s in streams.items()}
+    ref = spans['master']
+    for k, (a, b) in spans.items():
+        if b < ref[0] or a > ref[1]:
+            raise LogError(f'{k} times {a * 1e-9:.9g} .. {b * 1e-9:.9g} s and master times '
+                           f'{ref[0] * 1e-9:.9g} .. {ref[1] * 1e-9:.9g} s do not overlap: different time '
+                           f'bases or units?')
 
 
 def origin_of(log: RecordedLog) -> tuple[float, float]:
