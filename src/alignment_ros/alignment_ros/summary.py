@@ -44,6 +44,25 @@ def estimates_from_bag(bag: Path) -> dict[str, np.ndarray]:
     return {'t_ns': t, 'misalignment': mu.reshape(-1, 3), 'sigma': np.array(sig).reshape(-1, 3)}
 
 
+def state_estimate(bag: Path, at_s: float | None = None) -> dict | None:
+    """The whole estimate from /alignment/state (convert.state_msg): the last message at or
+    before `at_s` (the scored instant; None: the last one), as {t_s, labels (with their SI unit),
+    estimate, sigma}; None without one (or in the older 4-row layout, which has no estimate)."""
+    best = None
+    for m in _read(bag, (topics.ALIGN_STATE,))[topics.ALIGN_STATE]:
+        rows, cols = m.layout.dim
+        n = cols.size
+        if rows.size < 5 or n == 0:
+            continue
+        t = float(m.data[0])
+        if at_s is not None and t > at_s + 5e-4:
+            break
+        best = (t, cols.label.split(','), list(m.data[n:2 * n]), list(m.data[2 * n:3 * n]))
+    if best is None:
+        return None
+    return dict(zip(('t_s', 'labels', 'estimate', 'sigma'), best))
+
+
 def truth_from_bag(bag: Path) -> tuple[int, np.ndarray]:
     d = _read(bag, (topics.TRUTH_MISALIGNMENT,))[topics.TRUTH_MISALIGNMENT]
     if not d:
@@ -86,6 +105,7 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
         problems.append(f'foreign publisher on {topic}: {", ".join(names)}')
     return {
         **score,
+        'state_estimate': state_estimate(estimate_bag, score.get('scored_at_s')),
         'air_data': air,
         'sim_time_s': reached,
         'planned_sim_time_s': duration_s,
