@@ -55,7 +55,7 @@ class TransferAlignment(EngineViews):
         self._plane = plane
         self._model = make_model(cfg)
         self._rel = RelativeVelocity(cfg)
-        streams = DOPPLER_STREAMS if self._model.uses_doppler else STREAMS
+        streams: tuple[str, ...] = DOPPLER_STREAMS if self._model.uses_doppler else STREAMS
         if not self._rel.takes_ldv:
             streams = tuple(k for k in streams if k != 'ldv')
         self._first_ns: int | None = None          # the first stamp queued (LDV silence)
@@ -344,9 +344,9 @@ class TransferAlignment(EngineViews):
 
     def _monitor_update(self) -> None:
         """The last update's NIS into the consistency monitor."""
-        inn = self._results.innovation
-        if inn is not None:
-            self._whiteness.add(inn, self._results.innovation_cov)
+        inn, s = self._results.innovation, self._results.innovation_cov
+        if inn is not None and s is not None:
+            self._whiteness.add(inn, s)
             self._results.innovation = None
         res = self._monitor.add(self._results.nis, self._results.dof)
         if res is not None:
