@@ -45,3 +45,21 @@ def test_no_state_message_no_estimate(tmp_path):
     assert summary.state_estimate(bag) is None
     e = dataclasses.replace(_estimate(NS, 1), state=None)       # not computed: NaN, never a made-up zero
     assert np.isnan(np.array(convert.state_msg(e, LABELS).data[3:6])).all()
+
+
+def test_the_whiteness_of_the_filters_last_diagnostics(tmp_path):
+    bag = tmp_path / 'bag'
+    vals = {'whiteness': 'fail', 'whiteness_q': '812.5', 'whiteness_dof': '30', 'whiteness_p': '1e-150',
+            'whiteness_r1_max': '0.91', 'whiteness_band': '0.08765', 'whiteness_windows': '7',
+            'whiteness_windows_failed': '6', 'relative_velocity': 'zero (no LDV stream)'}
+    for path, last in ((tmp_path / 'early', False), (bag, True)):
+        with BagWriter(path) as w:
+            w.add_topic('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray')
+            for k, name, v in ((1, 'alignment_filter', {}), (2, 'air_data_filter', vals),
+                               (3, 'alignment_filter', vals))[:3 if last else 2]:
+                w.write('/diagnostics', serialize_message(convert.diagnostics(k * NS, name, b'\x00', 'x', v)), k * NS)
+    assert summary.whiteness(tmp_path / 'early') is None     # no window in the alignment filter's yet
+    wh = summary.whiteness(bag)
+    assert wh == {'result': 'fail', 'relative_velocity': 'zero (no LDV stream)', 'q': 812.5, 'p': 1e-150,
+                  'r1_max': 0.91, 'band': 0.08765, 'dof': 30, 'windows': 7, 'windows_failed': 6}
+    assert summary.whiteness_line(wh).startswith('innovation whiteness: fail (last window: Ljung-Box p 1e-150')
