@@ -1,8 +1,8 @@
 """The filter node's three outputs, as convert.estimate_to_msgs writes them from one Estimate:
 /alignment/misalignment (Vector3Stamped), /alignment/attitude (PoseWithCovarianceStamped:
 orientation = q_nb, covariance rotation block = attitude_cov, position = the INS position
-with its variances -1, not estimated) and /alignment/state (Float64MultiArray, 4 rows of the
-model's n states: stamp, error state, its 1-sigma, misalignment 1-sigma in the first 3)."""
+with its variances -1, not estimated) and /alignment/state (Float64MultiArray, 5 rows of the
+model's n states: stamp, estimate, its 1-sigma, misalignment 1-sigma in the first 3, correction)."""
 from __future__ import annotations
 
 import dataclasses
@@ -13,6 +13,7 @@ import pytest
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.models import make_model
 from alignment_core.estimation.outputs import Estimate
+from alignment_core.estimation.state_estimate import StateEstimate
 from alignment_ros import convert, topics
 
 # the default model (vm15): attitude, velocity error, gyro and accelerometer bias, master attitude
@@ -60,22 +61,24 @@ def test_misalignment_and_attitude_messages():
 
 
 @pytest.mark.parametrize('model', ['vm15', 'vm12', 'seed002_10', 'seed003_21'])
-def test_state_message_is_4_rows_of_the_models_states(model):
-    labels = make_model(dataclasses.replace(FilterConfig(), model=model)).labels
+def test_state_message_is_5_rows_of_the_models_states(model):
+    labels = StateEstimate(make_model(dataclasses.replace(FilterConfig(), model=model)).labels).labels
     n = len(labels)
     assert n == {'vm15': 15, 'vm12': 12, 'seed002_10': 10, 'seed003_21': 21}[model]
-    e = _estimate(n)
+    e = dataclasses.replace(_estimate(n), state=np.arange(n) * 1e-3 + 0.5)
     _, _, st = convert.estimate_to_msgs(e, labels, np.zeros(3))
     rows, cols = st.layout.dim
-    assert (rows.label, rows.size, rows.stride) == ('t_s|value|sigma|mu_sigma', 4, 4 * n)
+    assert (rows.label, rows.size, rows.stride) == ('t_s|estimate|sigma|mu_sigma|correction', 5, 5 * n)
     assert (cols.size, cols.stride) == (n, n)
     assert tuple(cols.label.split(',')) == labels
-    data = np.array(st.data).reshape(4, n)
+    assert all(lab.rsplit('_', 1)[1] in ('rad', 'mps', 'radps', 'mps2') for lab in labels)   # SI unit in each
+    data = np.array(st.data).reshape(5, n)
     np.testing.assert_array_equal(data[0], T_NS * 1e-9)
-    np.testing.assert_array_equal(data[1], e.x)
+    np.testing.assert_array_equal(data[1], e.state)
     np.testing.assert_array_equal(data[2], e.sigma)
     np.testing.assert_array_equal(data[3, :3], e.misalignment_sigma)
     np.testing.assert_array_equal(data[3, 3:], 0.0)
+    np.testing.assert_array_equal(data[4], e.x)
 
 
 def test_state_labels_must_match_the_state():

@@ -244,6 +244,24 @@ CONSISTENCY_DECK = Experiment(
     notes=READINGS['consistency_deck'],
 )
 
+RIGID_NO_LDV = Experiment(
+    name='rigid_no_ldv',
+    title='Rigid mount, no LDV: the slave on the master\'s body, relative velocity zero',
+    description=(
+        "The `rigid` scenario: the slave IMU rigidly on the master's body at a known lever arm "
+        "(-8, 2, 3) m, 180 s of velocity matching at sea state 4 (paper-mode ship), no LDV "
+        "(`filter.relative_velocity: zero`, 1 mm/s allowance for the mount), default filter (vm15 + kf), "
+        "scored at 170 s. An honest filter's average 3-dof misalignment NEES lies inside the 95 % "
+        "chi-square bounds."),
+    scenario='rigid',
+    base=(),
+    cells=(Cell('zero', (('relative_velocity', 'zero'),), ()),),
+    score_at=170.0,
+    settle_arcmin=(0.6, 0.6, 6.0),
+    series='relative_velocity',
+    quick_base=(('duration_s', 20.0),),
+)
+
 
 SEED002_TABLE5_DEG = {1: (0.0053, 0.0181, 0.1863), 2: (0.0174, 0.0191, 0.2342), 3: (0.0208, 0.0203, 0.2517),
                       4: (0.0299, 0.0242, 0.2764), 5: (0.0385, 0.0332, 0.3041), 6: (0.0459, 0.0362, 0.3420),
@@ -373,5 +391,5 @@ class Catalogue:
 
 CATALOGUE = Catalogue()
 for _e in (SEED000, SEED001, SEED002, SEED003, CATAPULT_GOAL, CATAPULT_REALISTIC, DECK_GOAL, CONSISTENCY_CATAPULT,
-           CONSISTENCY_DECK):
+           CONSISTENCY_DECK, RIGID_NO_LDV):
     CATALOGUE.add(_e)

@@ -119,7 +119,7 @@ class AlignmentFilterNode(node_util.CountingNode):
     def _publish(self, estimates: list[Estimate], t_ns: int) -> None:
         for e in estimates:
             p_w = e.p_w if e.p_w is not None else self._position()
-            mis, att, st = convert.estimate_to_msgs(e, self.engine.labels, p_w)
+            mis, att, st = convert.estimate_to_msgs(e, self.engine.state_labels, p_w)
             self.send(topics.ALIGN_MISALIGNMENT, mis)
             self.send(topics.ALIGN_ATTITUDE, att)
             self.send(topics.ALIGN_STATE, st)
@@ -168,6 +168,8 @@ class AlignmentFilterNode(node_util.CountingNode):
             'flags': ' '.join(flags), 'silent': ' '.join(d.silent), 'held': str(
                 e is not None and 'held' in e.flags).lower(),
             **{k: f'{v:.4g}' if isinstance(v, float) else v for k, v in d.consistency.items()},
+            **{k: f'{v:.4g}' if isinstance(v, float) else v for k, v in d.whiteness.items()},
+            'relative_velocity': d.relative_velocity, 'ldv_ignored': c.ldv_ignored,
             'consistency_failures': c.consistency_failures, 'pending': d.pending,
             'model': self.engine.model_name, 'states': self.engine.n_states, 'algorithm': self.sc.filter.algorithm,
             'lever_arm_treatment': self.sc.filter.lever_arm_treatment,

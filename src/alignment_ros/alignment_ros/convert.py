@@ -214,16 +214,29 @@ def estimate_to_msgs(e: Estimate, labels: tuple[str, ...], p_w
     cov[3:, 3:] = e.attitude_cov
     cov[0, 0] = cov[1, 1] = cov[2, 2] = -1.0      # position is not estimated
     att.pose.covariance = [float(x) for x in cov.ravel()]
+    return mis, att, state_msg(e, labels)
+
+
+STATE_ROWS = 't_s|estimate|sigma|mu_sigma|correction'
+
+
+def state_msg(e: Estimate, labels: tuple[str, ...]) -> Float64MultiArray:
+    """/alignment/state: 5 x n rows over the labels (the states' published names with their SI
+    unit, state_estimate.py): the stamp (s), the accumulated estimate, its 1-sigma, the
+    misalignment's 1-sigma (first 3), the last correction (the a-posteriori error state before
+    feedback)."""
     if len(e.x) != len(labels):
         raise ValueError(f'{len(e.x)} states but {len(labels)} labels')
+    n = len(labels)
     st = Float64MultiArray()
-    st.layout.dim = [MultiArrayDimension(label='t_s|value|sigma|mu_sigma', size=4, stride=4 * len(labels)),
-                     MultiArrayDimension(label=','.join(labels), size=len(labels), stride=len(labels))]
-    t = np.full(len(labels), e.t_ns * 1e-9)
-    mu_sig = np.zeros(len(labels))
+    st.layout.dim = [MultiArrayDimension(label=STATE_ROWS, size=5, stride=5 * n),
+                     MultiArrayDimension(label=','.join(labels), size=n, stride=n)]
+    t = np.full(n, e.t_ns * 1e-9)
+    mu_sig = np.zeros(n)
     mu_sig[:3] = e.misalignment_sigma
-    st.data = [float(x) for x in np.concatenate([t, e.x, e.sigma, mu_sig])]
-    return mis, att, st
+    est = e.state if e.state is not None else np.full(n, np.nan)
+    st.data = [float(x) for x in np.concatenate([t, est, e.sigma, mu_sig, e.x])]
+    return st
 
 
 def frame_mismatch(m, frame: str, child: str | None = None) -> str:

@@ -48,6 +48,53 @@ def estimates_from_bag(bag: Path) -> dict[str, np.ndarray]:
     return {'t_ns': t, 'misalignment': mu.reshape(-1, 3), 'sigma': np.array(sig).reshape(-1, 3)}
 
 
+def state_estimate(bag: Path, at_s: float | None = None) -> dict | None:
+    """The whole estimate from /alignment/state (convert.state_msg): the last message at or
+    before `at_s` (the scored instant; None: the last one), as {t_s, labels (with their SI unit),
+    estimate, sigma}; None without one (or in the older 4-row layout, which has no estimate)."""
+    best = None
+    for m in _read(bag, (topics.ALIGN_STATE,))[topics.ALIGN_STATE]:
+        rows, cols = m.layout.dim
+        n = cols.size
+        if rows.size < 5 or n == 0:
+            continue
+        t = float(m.data[0])
+        if at_s is not None and t > at_s + 5e-4:
+            break
+        best = (t, cols.label.split(','), list(m.data[n:2 * n]), list(m.data[2 * n:3 * n]))
+    if best is None:
+        return None
+    return dict(zip(('t_s', 'labels', 'estimate', 'sigma'), best))
+
+
+def whiteness(bag: Path) -> dict | None:
+    """The alignment filter's last /diagnostics: its innovation whiteness window (pass / fail,
+    Ljung-Box q, dof, p, the largest lag-1 autocorrelation and the white band; estimation/
+    whiteness.py) and where the relative velocity came from; None before a completed window."""
+    last = None
+    for m in _read(bag, (topics.DIAGNOSTICS,))[topics.DIAGNOSTICS]:
+        for st in m.status:
+            if st.name == 'alignment_filter':
+                last = {kv.key: kv.value for kv in st.values}
+    if last is None or 'whiteness' not in last:
+        return None
+    out: dict = {'result': last['whiteness'], 'relative_velocity': last.get('relative_velocity', 'ldv')}
+    for k in ('q', 'p', 'r1_max', 'band'):
+        out[k] = float(last[f'whiteness_{k}'])
+    for k in ('dof', 'windows', 'windows_failed'):
+        out[k] = int(last[f'whiteness_{k}'])
+    return out
+
+
+def whiteness_line(w: dict | None) -> str:
+    """One line of the table for the whiteness of the last window."""
+    if not w:
+        return 'innovation whiteness: no window completed'
+    return (f"innovation whiteness: {w['result']} (last window: Ljung-Box p {w['p']:.3g}, lag-1 "
+            f"autocorrelation up to {w['r1_max']:.3f} against +-{w['band']:.3f}; {w['windows_failed']} of "
+            f"{w['windows']} windows failed); relative velocity: {w['relative_velocity']}")
+
+
 def truth_from_bag(bag: Path) -> tuple[int, np.ndarray]:
     d = _read(bag, (topics.TRUTH_MISALIGNMENT,))[topics.TRUTH_MISALIGNMENT]
     if not d:
@@ -93,6 +140,8 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     return {
         **score,
         **({} if truth else {'truth': False}),     # the key only where there is none
+        'state_estimate': state_estimate(estimate_bag, score.get('scored_at_s')),
+        'innovation_whiteness': whiteness(estimate_bag),
         'air_data': air,
         'sim_time_s': reached,
         'planned_sim_time_s': duration_s,
@@ -168,6 +217,8 @@ def table(s: dict) -> str:
                          f"{(est[k] - mu[k]) / ARCMIN:>10.3f}{sig[k] / ARCMIN:>10.3f}")
     else:
         lines.append('misalignment: nothing to score')
+    if 'innovation_whiteness' in s:
+        lines.append(whiteness_line(s['innovation_whiteness']))
     if s.get('air_data'):
         lines += air_data_summary.table_lines(s['air_data'])
     rtf = s.get('real_time_factor')

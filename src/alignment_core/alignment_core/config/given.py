@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from alignment_core.aircraft.catapult import track_length_from_dict
+from alignment_core.estimation import presets as filter_presets
 from alignment_core.sensors import presets as sensor_presets
 from alignment_core.validation import ConfigError
 
@@ -92,10 +93,11 @@ def _lookup(data: dict, key: str) -> tuple[bool, Any]:
 
 def fill_defaults(data: dict) -> dict:
     """Fill, in place, the keys the given ones imply (an explicit key always wins): each
-    sensor preset (imu.preset, master.preset) its section's keys, then the keys of FOLLOWS
-    from theirs; ldv.track_length_m follows the catapult whenever it is enabled (its default).
-    Returns data."""
+    sensor preset (imu.preset, master.preset) and the filter preset (filter.preset) its
+    section's keys, then the keys of FOLLOWS from theirs; ldv.track_length_m follows the
+    catapult whenever it is enabled (its default). Returns data."""
     sensor_presets.apply(data)
+    filter_presets.apply(data)
     for key, source in FOLLOWS.items():
         if _lookup(data, key)[0]:
             continue

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from alignment_core.estimation.models import DOPPLER_MODELS, NONLINEAR_MODELS
+from alignment_core.estimation.presets import PRESET_NAMES
 from alignment_core.validation import require
 
 LINEAR_ALGORITHMS = ('kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'carlson', 'ud', 'combined')
@@ -97,6 +98,16 @@ class FilterConfig:
     rate_match_sigma_dph: float = 1.0         # white noise of the rate match beyond the gyro's ARW
     master_delay_state: bool = False          # + the master's unknown latency as a state (models/master_delay.py)
     master_delay_sigma_ms: float = 20.0       # ... its prior 1-sigma
+    # relative velocity of the slave to the master's body (estimation/relative_velocity.py):
+    # ldv: from /ldv/twist; zero: rigidly tied (no LDV); auto: zero when no LDV sample comes
+    relative_velocity: Literal['auto', 'ldv', 'zero'] = 'auto'
+    rigid_velocity_sigma_mps: float = 0.005   # zero: white noise of the zero relative velocity
+    ldv_silence_s: float = 30.0               # an LDV this far (stamps) behind the IMU and master: silent
+    preset: str = ''                          # tuning grade (estimation/presets.py), resolved on load
+    flexure_states: bool = True               # seed003_*: false drops theta, theta' (6 states)
+    whiteness_window_updates: int = 500       # innovation whiteness (estimation/whiteness.py)
+    whiteness_lags: int = 10                  # ... Ljung-Box lags
+    whiteness_p: float = 1e-3                 # ... a window whose p-value is below this fails
 
     def validate(self) -> None:
         for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
@@ -131,10 +142,30 @@ class FilterConfig:
                   'doppler_drift_sigma_arcmin', 'rate_match_sigma_dph', 'master_delay_sigma_ms'):
             require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
         require(self.init_yaw_sigma_deg >= 0.0, f"init_yaw_sigma_deg must be >= 0, got {self.init_yaw_sigma_deg}")
-        require(all(v > 0.0 for v in self.flexure_sigma_arcmin + self.flexure_tau_s),
+        require(not self.flexure_states or all(v > 0.0 for v in self.flexure_sigma_arcmin + self.flexure_tau_s),
                 f"flexure_sigma_arcmin and flexure_tau_s must be > 0, got {self.flexure_sigma_arcmin}, "
                 f"{self.flexure_tau_s}")
         self.validate_combination()
+        self.validate_estimator_options()
+
+    def validate_estimator_options(self) -> None:
+        """Relative velocity, preset, flexure states, whiteness (docs/engine.md)."""
+        require(self.relative_velocity in ('auto', 'ldv', 'zero'),
+                f"relative_velocity must be auto, ldv or zero, got {self.relative_velocity!r}")
+        require(self.rigid_velocity_sigma_mps > 0.0,
+                f"rigid_velocity_sigma_mps must be > 0, got {self.rigid_velocity_sigma_mps}")
+        require(self.ldv_silence_s > 0.0, f"ldv_silence_s must be > 0, got {self.ldv_silence_s}")
+        require(not (self.relative_velocity == 'zero' and self.model in DOPPLER_MODELS),
+                f"relative_velocity zero: {self.model} needs the LDV on the deck")
+        require(self.preset in ('',) + PRESET_NAMES,
+                f"preset must be one of {', '.join(PRESET_NAMES)} (or empty), got {self.preset!r}")
+        require(self.flexure_states or self.model in ATTITUDE_MODELS,
+                f"flexure_states false: only {', '.join(ATTITUDE_MODELS)} have flexure states, got {self.model}")
+        require(10 <= self.whiteness_window_updates <= 100000,
+                f"whiteness_window_updates must be in [10, 100000], got {self.whiteness_window_updates}")
+        require(1 <= self.whiteness_lags < self.whiteness_window_updates // 2,
+                f"whiteness_lags must be in [1, window / 2), got {self.whiteness_lags}")
+        require(0.0 < self.whiteness_p < 0.5, f"whiteness_p must be in (0, 0.5), got {self.whiteness_p}")
 
     def validate_monitoring(self) -> None:
         """Plausibility limits, gap handling, the gate and the consistency monitor."""

@@ -30,6 +30,8 @@ from alignment_core.estimation.models.base import DV
 from alignment_core.estimation.outputs import Counters, Estimate
 from alignment_core.estimation.plausibility import InputGate
 from alignment_core.estimation.publication import EstimateMaker, OdometryMaker, PublishGuard, prior_estimate
+from alignment_core.estimation.relative_velocity import ABSENT, LDV, RelativeVelocity
+from alignment_core.estimation.whiteness import InnovationWhiteness
 from alignment_core.geometry import earth
 from alignment_core.navigation.history import LdvHistory, LdvRecord, SlaveHistory
 from alignment_core.navigation.ordering import StampMerger
@@ -52,7 +54,11 @@ class TransferAlignment(EngineViews):
         self._cfg = cfg
         self._plane = plane
         self._model = make_model(cfg)
-        streams = DOPPLER_STREAMS if self._model.uses_doppler else STREAMS
+        self._rel = RelativeVelocity(cfg)
+        streams: tuple[str, ...] = DOPPLER_STREAMS if self._model.uses_doppler else STREAMS
+        if not self._rel.takes_ldv:
+            streams = tuple(k for k in streams if k != 'ldv')
+        self._first_ns: int | None = None          # the first stamp queued (LDV silence)
         self._merger = StampMerger(streams)
         self._counters = Counters()
         self._gate = InputGate(cfg, self._counters, streams)
@@ -69,6 +75,8 @@ class TransferAlignment(EngineViews):
         self._bridge_ns = int(cfg.gap_bridge_factor * self._imu_dt_nominal * 1e9)
         self._matcher = Matcher(cfg, self._model, imu_rate_hz, self._span_ns, self._counters)
         self._results = self._matcher.results
+        if self._rel.rigid:
+            self._matcher.use_rigid_noise()
         self._track_intervals = self._matcher.tracks_intervals
         self._ldv_history = LdvHistory(self._span_ns, cfg.ldv_sigma_mps)
         self._imu_buffer: deque[ImuSample] = deque()       # IMU samples before (re-)anchoring
@@ -92,6 +100,7 @@ class TransferAlignment(EngineViews):
         self._health = status.Health()
         self._monitor = NisMonitor(cfg.consistency_window_updates, cfg.consistency_warn_p,
                                    cfg.consistency_error_windows, cfg.gate_chi2 if cfg.gate_chi2 > 0.0 else None)
+        self._whiteness = InnovationWhiteness(cfg.whiteness_window_updates, cfg.whiteness_lags, cfg.whiteness_p)
         self._maker = EstimateMaker(self._model, OdometryMaker(self._model, plane, self._imu_dt_nominal,
                                                                cfg.arw_dpsh, cfg.gyro_bias_sigma_dph))
         self._guard = PublishGuard(cfg.misalignment_max_deg * DEG)
@@ -103,6 +112,10 @@ class TransferAlignment(EngineViews):
         return self._push('imu', s)
 
     def push_ldv(self, s: LdvSample) -> bool:
+        """An LDV sample; ignored (counted) under relative velocity zero or once it was silent."""
+        if not self._rel.takes_ldv:
+            self._counters.ldv_ignored += 1
+            return True
         return self._push('ldv', s)
 
     def push_master(self, s: MasterSample) -> bool:
@@ -124,12 +137,15 @@ class TransferAlignment(EngineViews):
             self._gate.reject_out_of_order()
             return False
         self._gate.accepted(stream, s.t_ns)
+        if self._first_ns is None:
+            self._first_ns = s.t_ns
         return True
 
     def process(self, final: bool = False) -> list[Estimate]:
         """Run every event up to the watermark (all of them if final); return the new outputs as
         published (`published`: the same as `outputs` while the estimates are good)."""
         n0 = len(self._outputs)
+        self._check_ldv(final)
         events = self._merger.flush() if final else self._merger.pop_ready()
         for stream, t, item in events:
             if stream == 'imu':
@@ -149,6 +165,17 @@ class TransferAlignment(EngineViews):
         if not self._keep_history:
             del self._outputs[:-1], self._published[:-1]
         return new
+
+    def _check_ldv(self, final: bool) -> None:
+        """Stop waiting for an LDV that is silent or absent (relative_velocity.py)."""
+        rel = self._rel
+        if rel.mode != LDV or not rel.silent(self._merger.last, self._first_ns, final):
+            return
+        self._merger.drop('ldv')
+        if rel.mode == ABSENT:
+            self._gate.forget('ldv')
+            self._matcher.use_rigid_noise()
+        self._match_pending()
 
     def _prior(self, e: Estimate) -> Estimate:
         p0 = self._model.initial_covariance()
@@ -247,6 +274,7 @@ class TransferAlignment(EngineViews):
         hl.gap_level = max(hl.gap_level, ERROR if gap > self._cfg.gap_error_s else WARN)
         hl.gap_s, hl.recover_mark = gap, self._monitor.completed
         self._monitor.restart()
+        self._whiteness.restart()
         self._matcher.restart(self._imu_rate_hz)
         if hl.running:
             try:
@@ -316,6 +344,10 @@ class TransferAlignment(EngineViews):
 
     def _monitor_update(self) -> None:
         """The last update's NIS into the consistency monitor."""
+        inn, s = self._results.innovation, self._results.innovation_cov
+        if inn is not None and s is not None:
+            self._whiteness.add(inn, s)
+            self._results.innovation = None
         res = self._monitor.add(self._results.nis, self._results.dof)
         if res is not None:
             if res.failed:
@@ -348,7 +380,7 @@ class TransferAlignment(EngineViews):
                 continue
             if not final:
                 latest = self._ldv_history.latest_ns
-                if latest is None or latest < t_v or (
+                if (self._rel.waits() and (latest is None or latest < t_v)) or (
                         self._live is not None and not anchoring and self._live.t_ns < t_v):
                     return
             self._pending.popleft()
@@ -358,6 +390,8 @@ class TransferAlignment(EngineViews):
         """The master sample valid at t_v against the LDV and the slave solution at t_v (the
         first one initialises the slave, the first after a gap on the deck re-anchors it)."""
         ldv = self._ldv_history.at(t_v)
+        if self._rel.mode != LDV and (ldv is None or self._rel.rigid):
+            ldv = self._rel.stand_in(t_v, self._ldv_history.latest_ns, self._launch.moving, self._deck_disp)
         live = self._live
         reanchor = live is not None and self._anchor_from is not None
         ref = self._matcher.reference(m, ldv, self._deck_disp, surveyed=reanchor)

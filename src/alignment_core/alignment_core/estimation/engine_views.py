@@ -16,6 +16,8 @@ from alignment_core.estimation.models import Corrections, ErrorModel
 from alignment_core.estimation.outputs import Counters, DeckMotion, Diagnostics, Estimate
 from alignment_core.estimation.plausibility import InputGate
 from alignment_core.estimation.publication import EstimateMaker
+from alignment_core.estimation.relative_velocity import RelativeVelocity
+from alignment_core.estimation.whiteness import InnovationWhiteness
 from alignment_core.navigation.ordering import StampMerger
 from alignment_core.navigation.strapdown import NavState
 
@@ -36,6 +38,8 @@ class EngineViews:
     _launch: LaunchDetector
     _deck_disp: np.ndarray
     _model: ErrorModel
+    _rel: RelativeVelocity
+    _whiteness: InnovationWhiteness
 
     @property
     def outputs(self) -> tuple[Estimate, ...]:
@@ -83,9 +87,11 @@ class EngineViews:
             filt = {} if self._live is None else self._live.kf.diagnostics()
         level, flags = self.status()
         silent = self._gate.silent()
-        return Diagnostics(filt, self.healthy, self.failure, self._merger.pending(), level, flags,
-                           status.message(level, self._health, self._monitor, self._matching, silent), silent,
-                           self._monitor.summary())
+        text = status.message(level, self._health, self._monitor, self._matching, silent)
+        if self._rel.mode != 'ldv':
+            text += f'; relative velocity {self.relative_velocity}'
+        return Diagnostics(filt, self.healthy, self.failure, self._merger.pending(), level, flags, text, silent,
+                           self._monitor.summary(), self.relative_velocity, self._whiteness.summary())
 
     @property
     def solution(self) -> NavState | None:
@@ -110,6 +116,25 @@ class EngineViews:
     @property
     def labels(self) -> tuple[str, ...]:
         return self._model.labels
+
+    @property
+    def state_labels(self) -> tuple[str, ...]:
+        """The published names of the states, with their SI unit (Estimate.state, state_estimate.py)."""
+        return self._maker.state.labels
+
+    @property
+    def relative_velocity(self) -> str:
+        """Where the relative velocity comes from now: 'ldv', 'zero', 'zero (no LDV stream)' or
+        'ldv silent after t = ... s' (relative_velocity.py)."""
+        rel = self._rel
+        if rel.t_silent_ns is not None:
+            return f'{rel.mode} after t = {rel.t_silent_ns * 1e-9:.3f} s'
+        return rel.mode
+
+    @property
+    def whiteness(self) -> InnovationWhiteness:
+        """The innovation whiteness test (its windows so far: `history`, `last`; whiteness.py)."""
+        return self._whiteness
 
     @property
     def n_states(self) -> int:

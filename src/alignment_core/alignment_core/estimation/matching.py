@@ -72,6 +72,8 @@ class MatchResults:
     corr: Corrections = field(default_factory=Corrections)
     dof: int = 0
     anchor: tuple[np.ndarray, np.ndarray] | None = None    # (C_m (3, 3), slave q_nb (4,))
+    innovation: np.ndarray | None = None   # the last accepted master update's innovation and its
+    innovation_cov: np.ndarray | None = None   # covariance S (innovation whiteness)
 
 
 class Matcher:
@@ -106,6 +108,11 @@ class Matcher:
         self._prev_master: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None   # t_v, C_m, v_b, w_b
         self.results = MatchResults(mu=np.zeros(3), mu_sigma=np.full(3, cfg.init_attitude_sigma_deg * DEG),
                                     x=np.zeros(model.n))
+
+    def use_rigid_noise(self) -> None:
+        """Relative velocity zero (a rigid mount, estimation/relative_velocity.py): every match is
+        parked, with the rigid-mount noise."""
+        self._r_parked = np.eye(3) * (self._cfg.rigid_velocity_sigma_mps**2 + self._cfg.master_velocity_sigma_mps**2)
 
     def restart(self, imu_rate_hz: float) -> None:
         """Forget what ties the matches to the slave's past (after a bridged IMU gap): the low-pass
@@ -234,6 +241,7 @@ class Matcher:
         if self._gated(upd.accepted, gate):
             return
         self._counters.updates += 1
+        res.innovation, res.innovation_cov = upd.innovation, upd.s
         x = kf.x
         res.x = x.copy()
         p = kf.P

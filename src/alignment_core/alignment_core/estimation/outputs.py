@@ -33,6 +33,9 @@ class Estimate:
     w_b: np.ndarray | None = None     # (3,) body rate w.r.t. the nav frame, body axes, rad/s
     pose_cov: np.ndarray | None = None    # (6, 6) position (m^2), then attitude (rotation vector, rad^2); -1: unknown
     twist_cov: np.ndarray | None = None   # (6, 6) body velocity (m^2/s^2), then body rate ((rad/s)^2); -1: unknown
+    # the accumulated estimate of every state (state_estimate.py; labels: the engine's state_labels),
+    # SI, its 1-sigma is `sigma`; None: not computed
+    state: np.ndarray | None = None   # (n,)
 
 
 @dataclass
@@ -62,6 +65,7 @@ class Counters:
     bridged_gaps: int = 0             # IMU gaps bridged (longer than gap_bridge_factor intervals)
     gate_released: int = 0            # updates taken after gate_release_updates gated ones in a row
     consistency_failures: int = 0     # NIS windows above their chi-square bound
+    ldv_ignored: int = 0              # LDV samples under relative velocity zero or after it fell silent
 
 
 @dataclass(frozen=True)
@@ -78,6 +82,8 @@ class Diagnostics:
     message: str = ''                 # one line for /diagnostics
     silent: tuple[str, ...] = ()      # streams that fell silent (arrival stamps)
     consistency: dict[str, Any] = field(default_factory=dict)   # the NIS monitor's last window
+    relative_velocity: str = 'ldv'    # where the relative velocity comes from (relative_velocity.py)
+    whiteness: dict[str, Any] = field(default_factory=dict)     # the whiteness test's last window
 
 
 @dataclass(frozen=True)

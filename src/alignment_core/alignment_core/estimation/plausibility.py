@@ -152,6 +152,10 @@ class InputGate:
         others = [v for k, v in self._latest.items() if k != stream and v is not None]
         return bool(others) and t_ns - max(others) > fut
 
+    def forget(self, stream: str) -> None:
+        """A stream the run does not have (no LDV): never reported silent."""
+        self._latest.pop(stream, None)
+
     def silent(self, streams: tuple[str, ...] = ('master', 'ldv')) -> tuple[str, ...]:
         """The streams whose latest stamp lags the newest of any stream by more than silence_ns
         (or that never delivered while the others ran that long)."""

@@ -16,6 +16,7 @@ from alignment_core.estimation.matching import LiveSolution, MatchResults
 from alignment_core.estimation.models import ErrorModel
 from alignment_core.estimation.models.base import DV, EPS
 from alignment_core.estimation.outputs import Estimate
+from alignment_core.estimation.state_estimate import StateEstimate
 from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import quat_to_dcm
 from alignment_core.navigation.strapdown import NavState
@@ -88,6 +89,8 @@ class EstimateMaker:
     def __init__(self, model: ErrorModel, odometry: OdometryMaker) -> None:
         self._model = model
         self._odometry = odometry
+        self.state = StateEstimate(model.labels)
+        self.held_state: np.ndarray | None = None      # the accumulated estimate at the last keep
         self.held: tuple[np.ndarray, np.ndarray, dict, np.ndarray, np.ndarray] | None = None
 
     def keep(self, live: LiveSolution, res: MatchResults) -> bool:
@@ -99,6 +102,7 @@ class EstimateMaker:
             return False
         odo = self._odometry.make(live.ins.s, p, live.gyro, res.corr.bg)
         self.held = (cov, sigma, live.kf.diagnostics(), odo.pose_cov, odo.twist_cov)
+        self.held_state = self.state.values(live.kf.x, res.corr)
         return True
 
     def make(self, t: int, live: LiveSolution, res: MatchResults, updates: int, matching: bool,
@@ -118,7 +122,8 @@ class EstimateMaker:
             sigma=sigma, bias_gyro=corr.bg.copy(), bias_accel=corr.ba.copy(),
             nis=res.nis, updates=updates, matching=matching, fading=diag.get('fading', 1.0),
             healthy=level < ERROR, level=level, flags=flags, p_w=p_w, v_b=v_b, w_b=w_b,
-            pose_cov=pose_cov, twist_cov=twist_cov)
+            pose_cov=pose_cov, twist_cov=twist_cov,
+            state=None if self.held_state is None else self.held_state.copy())
 
 
 class PublishGuard:
@@ -137,7 +142,7 @@ class PublishGuard:
 
     def good(self, e: Estimate) -> bool:
         arrays = [e.misalignment, e.misalignment_sigma, e.q_nb, e.attitude_cov, e.x, e.sigma]
-        arrays += [a for a in (e.p_w, e.v_b, e.w_b, e.pose_cov, e.twist_cov) if a is not None]
+        arrays += [a for a in (e.p_w, e.v_b, e.w_b, e.pose_cov, e.twist_cov, e.state) if a is not None]
         if not finite(*arrays):
             return False
         q = e.q_nb
@@ -169,4 +174,4 @@ def prior_estimate(e: Estimate, mu_sigma: np.ndarray, p0: np.ndarray, att: slice
     return dataclasses.replace(
         e, misalignment=np.zeros(3), misalignment_sigma=mu_sigma.copy(), q_nb=q, attitude_cov=p0[att, att].copy(),
         x=np.zeros(len(e.x)), sigma=np.sqrt(np.diag(p0)), bias_gyro=np.zeros(3), bias_accel=np.zeros(3),
-        nis=math.nan, p_w=None, v_b=None, w_b=None, pose_cov=None, twist_cov=None)
+        nis=math.nan, p_w=None, v_b=None, w_b=None, pose_cov=None, twist_cov=None, state=np.zeros(len(e.x)))

@@ -35,6 +35,13 @@ class StampMerger:
         heapq.heappush(self.heap, (t_ns, self.priority[stream], next(self.seq), stream, item))
         return True
 
+    def drop(self, stream: str) -> None:
+        """Stop waiting for a stream (it fell silent): the watermark is the other streams'; its
+        queued events stay; later pushes to it are refused (KeyError)."""
+        if self.last.pop(stream) is None:
+            self._silent -= 1
+        del self.priority[stream]
+
     def watermark(self) -> int | None:
         """The least recent stamp of all streams (None until every stream has delivered)."""
         return None if self._silent else min(t for t in self.last.values() if t is not None)

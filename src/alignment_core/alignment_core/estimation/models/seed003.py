@@ -2,6 +2,8 @@
 
 `seed003_21`: x = [phi (3), dV (3), eps (3), nabla (3), mu (3), theta (3), theta' (3)];
 `seed003_24`: the same + the master INS attitude error phi_m (3, random constants), as in vm15.
+`filter.flexure_states: false` drops theta and theta' (15 and 18 states): a mount known to be
+rigid (no deck flexure between the master and the slave), H_a = [I 0 0 0 -C (-I)].
 
 Geometry: the aircraft IMU sits on the deck with C_a^n = C_m^n exp([mu x]) exp([theta x]),
 mu the static mounting misalignment (aircraft axes, random constant), theta the deck flexure
@@ -91,39 +93,42 @@ class Seed003VelocityAttitude(ErrorModel):
         self.cfg = cfg
         self.master = master_states
         self.name = 'seed003_24' if master_states else 'seed003_21'
-        self.labels = (VM_LABELS + ('mu_x', 'mu_y', 'mu_z', 'theta_x', 'theta_y', 'theta_z',
-                                    'thetadot_x', 'thetadot_y', 'thetadot_z')
-                       + (MASTER_LABELS if master_states else ()))
+        self.flexure = getattr(cfg, 'flexure_states', True)
+        flex = ('theta_x', 'theta_y', 'theta_z', 'thetadot_x', 'thetadot_y', 'thetadot_z') if self.flexure else ()
+        self.labels = VM_LABELS + ('mu_x', 'mu_y', 'mu_z') + flex + (MASTER_LABELS if master_states else ())
+        self._phi_m = PHI_M if self.flexure else THETA     # without flexure phi_m follows mu
         self.kinds = (PHI,) * 3 + (DV,) * 3 + (EPS,) * 3 + (NABLA,) * 3 + (OTHER,) * (len(self.labels) - 12)
         self._n = len(self.labels)
         self.noise = noise_densities(cfg)
         self.sigma_flex = np.asarray(cfg.flexure_sigma_arcmin, dtype=float) * ARCMIN
         self.tau_flex = np.asarray(cfg.flexure_tau_s, dtype=float)
-        self.beta = BETA_TAU / self.tau_flex
+        self.beta = BETA_TAU / self.tau_flex if self.flexure else np.zeros(3)
         self.r_att = np.eye(3) * (cfg.attitude_match_sigma_arcmin * ARCMIN) ** 2
         self._flex: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._h0 = np.zeros((6, self._n))
         self._h0[0:3, 3:6] = np.eye(3)
         self._h0[3:6, 0:3] = np.eye(3)
         if master_states:
-            self._h0[3:6, PHI_M] = -np.eye(3)
+            self._h0[3:6, self._phi_m] = -np.eye(3)
         self._r0 = np.zeros((6, 6))
         self._r0[3:6, 3:6] = self.r_att
         self._qd: dict[float, np.ndarray] = {}
         self._phi0: dict[float, np.ndarray] = {}
         # cells of H the measurement fills each time: -C at (3, MU) and (3, THETA), then (seed003_24)
         # -[u x] at (0, PHI_M), as flat indices for one put()
-        cells = [(3 + i, col + j) for col in (MU.start, THETA.start) for i in range(3) for j in range(3)]
+        cols = (MU.start, THETA.start) if self.flexure else (MU.start,)
+        cells = [(3 + i, col + j) for col in cols for i in range(3) for j in range(3)]
         if master_states:
-            cells += skew_cells(0, PHI_M.start)
+            cells += skew_cells(0, self._phi_m.start)
         self._h_cells = np.array([r * self._n + c for r, c in cells])
 
     def initial_covariance(self) -> np.ndarray:
         c = self.cfg
         blocks = [attitude_variances(c), np.full(3, c.init_velocity_sigma_mps ** 2),
                   np.full(3, (c.gyro_bias_sigma_dph * DPH) ** 2), np.full(3, (c.accel_bias_sigma_ug * UG) ** 2),
-                  np.full(3, (c.mounting_sigma_deg * DEG) ** 2), self.sigma_flex ** 2,
-                  (self.beta * self.sigma_flex) ** 2]
+                  np.full(3, (c.mounting_sigma_deg * DEG) ** 2)]
+        if self.flexure:
+            blocks += [self.sigma_flex ** 2, (self.beta * self.sigma_flex) ** 2]
         if self.master:
             blocks.append(master_variances(c))
         return np.diag(np.concatenate(blocks))
@@ -131,6 +136,8 @@ class Seed003VelocityAttitude(ErrorModel):
     def continuous(self, p: Propagation) -> np.ndarray:
         f = np.zeros((self._n, self._n))
         f[0:12, 0:12] = continuous(p.c_nb, p.f_n, p.w_ie, p.w_en)
+        if not self.flexure:
+            return f
         f[THETA, THETA_DOT] = np.eye(3)
         f[THETA_DOT, THETA] = -np.diag(self.beta ** 2)
         f[THETA_DOT, THETA_DOT] = -np.diag(2.0 * self.beta)
@@ -154,7 +161,8 @@ class Seed003VelocityAttitude(ErrorModel):
         phi0 = self._phi0.get(p.h)
         if phi0 is None:                  # I with the flexure block, per interval length
             phi0 = self._phi0[p.h] = np.eye(self._n)
-            phi0[15:21, 15:21] = self._flexure(p.h)[0]
+            if self.flexure:
+                phi0[15:21, 15:21] = self._flexure(p.h)[0]
         phi = phi0.copy()
         phi[0:12, 0:12] = transition(p.c_nb, p.f_n, p.w_ie, p.w_en, p.h)
         return phi
@@ -164,7 +172,8 @@ class Seed003VelocityAttitude(ErrorModel):
         if qd is None:
             qd = np.zeros((self._n, self._n))
             qd[0:12, 0:12] = process_noise(self.noise, h)
-            qd[15:21, 15:21] = self._flexure(h)[1]
+            if self.flexure:
+                qd[15:21, 15:21] = self._flexure(h)[1]
             self._qd[h] = qd
         return qd
 
@@ -179,7 +188,7 @@ class Seed003VelocityAttitude(ErrorModel):
         z = np.concatenate([m.z_vel, dcm_to_rotvec(delta.T)])
         h = self._h0.copy()               # the constant blocks: I (velocity), I (phi), -I (phi_m)
         neg_c = [-e for e in c.ravel().tolist()]
-        vals = neg_c + neg_c              # H[3:6, MU] = H[3:6, THETA] = -C
+        vals = neg_c + neg_c if self.flexure else neg_c     # H[3:6, MU] = H[3:6, THETA] = -C
         if self.master:                   # H[0:3, PHI_M] = [(-u) x]
             ux, uy, uz = floats(m.u_n)
             vals += skew_values(-ux, -uy, -uz)

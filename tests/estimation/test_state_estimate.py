@@ -1,0 +1,67 @@
+"""The whole estimate (estimation/state_estimate.py): every state of every model published
+under a name with its SI unit, as the corrections fed back so far plus the filter's state;
+in a run, the delay state finds the master's true latency and the biases are the engine's
+accumulated corrections."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.estimation.config import FilterConfig
+from alignment_core.estimation.models import MODELS, Corrections, make_model
+from alignment_core.estimation.state_estimate import StateEstimate
+
+UNITS = ('rad', 'mps', 'radps', 'mps2', 'm', 's', 'ratio')
+
+
+@pytest.mark.parametrize('model', MODELS)
+def test_every_state_of_every_model_has_a_name_with_its_unit(model):
+    cfg = FilterConfig(model=model, algorithm='ekf' if model == 'seed000_large_angle' else 'kf')
+    m = make_model(cfg)
+    names = StateEstimate(m.labels).labels
+    assert len(names) == m.n and len(set(names)) == m.n
+    assert all(n.rsplit('_', 1)[1] in UNITS for n in names)
+
+
+def test_the_options_states_are_named_and_an_unknown_state_is_refused():
+    m = make_model(FilterConfig(model='seed003_24', master_delay_state=True, lever_arm_states=True))
+    names = StateEstimate(m.labels).labels
+    for n in ('mounting_x_rad', 'flexure_z_rad', 'flexure_rate_y_radps', 'master_attitude_error_U_rad',
+              'master_delay_s', 'lever_arm_error_z_m', 'gyro_bias_x_radps', 'accel_bias_y_mps2'):
+        assert n in names
+    with pytest.raises(ValueError, match='no published name'):
+        StateEstimate(('phi_E', 'bogus_x'))
+
+
+def test_fed_back_states_add_their_correction_the_others_do_not():
+    """vm15 + lever arm: x has every state 1; corrections bg = 10, 20, 30, ba = 4, 5, 6, dr = 7, 8, 9."""
+    m = make_model(FilterConfig(lever_arm_states=True))
+    s = StateEstimate(m.labels)
+    corr = Corrections(bg=np.array([10.0, 20, 30]), ba=np.array([4.0, 5, 6]), dr=np.array([7.0, 8, 9]))
+    v = s.values(np.ones(m.n), corr)
+    want = np.ones(m.n)
+    want[6:9] += [10, 20, 30]
+    want[9:12] += [4, 5, 6]
+    want[15:18] += [7, 8, 9]
+    np.testing.assert_array_equal(v, want)
+
+
+def test_a_run_publishes_the_accumulated_biases_and_finds_the_latency():
+    """60 s on the deck, master latency 20 ms unknown to the filter but with the delay state: the
+    published master_delay_s is 20 ms within 3 sigma (sigma below 1 ms); the bias states are the
+    engine's accumulated corrections, not the last update's."""
+    sc = scenario.load('deck', overrides={'duration_s': 60.0, 'master.latency_s': 0.02,
+                                          'filter.master_delay_state': True})
+    f = pipeline.align(sc, pipeline.simulate(sc))
+    e = f.outputs[-1]
+    names = f.state_labels
+    assert e.state is not None and np.all(np.isfinite(e.state))
+    k = names.index('master_delay_s')
+    assert abs(e.state[k] - 0.02) < 3 * e.sigma[k] and e.sigma[k] < 1e-3
+    g = [names.index(f'gyro_bias_{a}_radps') for a in 'xyz']
+    a = [names.index(f'accel_bias_{a}_mps2') for a in 'xyz']
+    np.testing.assert_array_equal(e.state[g], e.bias_gyro)     # the residual is zero after feedback
+    np.testing.assert_array_equal(e.state[a], e.bias_accel)
+    assert not np.allclose(e.state[a], e.x[a])                  # the last correction is something else
