@@ -63,7 +63,9 @@ fi
 ENV
 
 # colcon build (symlink install: edits in src/ take effect without a rebuild)
-SRC_SHA="$(find src -name package.xml -o -name setup.py -o -name setup.cfg | sort | xargs cat | sha256sum | cut -d' ' -f1)"
+# the packaging files' contents and the names of the installed config files (a new scenario needs a build)
+SRC_SHA="$( { find src -name package.xml -o -name setup.py -o -name setup.cfg | sort | xargs cat; \
+             find config -name '*.yaml' | sort; } | sha256sum | cut -d' ' -f1)"
 BUILD_STAMP="$ROOT/ros2_ws/install/.build.sha"
 if [ "$SRC_SHA" != "$(cat "$BUILD_STAMP" 2>/dev/null || true)" ]; then
   echo "setup.sh: colcon build"
