@@ -16,8 +16,7 @@ from alignment_core import pipeline
 from alignment_core.config import scenario as core_scenario
 from alignment_core.estimation.engine import TransferAlignment
 from alignment_core.geometry.rotations import quat_to_dcm
-from alignment_core.recorded import export
-from alignment_core.recorded import log as recorded
+from alignment_core.recorded import export, recording
 from alignment_core.units import DEG, G0
 from alignment_ros import convert, importer, topics
 from alignment_ros.bag import BagReader
@@ -80,7 +79,7 @@ def write_canonical(d, sc, inp) -> None:
 def align_bag(bag, sc) -> TransferAlignment:
     """A fresh filter fed the bag's sensor messages in stamp order (as the filter node takes them)."""
     meta = BagReader(bag).metadata().custom_data
-    plane = recorded.plane_at((float(meta[importer.ORIGIN_LAT]) * DEG, float(meta[importer.ORIGIN_LON]) * DEG))
+    plane = recording.plane_at((float(meta[importer.ORIGIN_LAT]) * DEG, float(meta[importer.ORIGIN_LON]) * DEG))
     f = TransferAlignment(sc.filter, plane, float(meta[importer.IMU_RATE]))
     push = {topics.AIRCRAFT_IMU: (f.push_imu, convert.msg_to_imu),
             topics.MASTER_ODOM: (f.push_master, convert.msg_to_master),

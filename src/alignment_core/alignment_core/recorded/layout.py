@@ -22,7 +22,7 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-from .units import LogError
+from .column_units import LogError
 
 STREAMS = ('imu', 'master', 'ldv', 'doppler')
 FILE_KEYS = ('header', 'delimiter', 'variable', 'names', 'time', 'time_unit')

@@ -16,8 +16,8 @@ import numpy as np
 from alignment_core.units import G0
 
 from . import conventions, derive
+from .column_units import LogError, factor
 from .table import Table, read_table
-from .units import LogError, factor
 
 MAX_RATE_RADPS = 3.0        # a larger body rate (p99) suggests deg/s given as rad/s
 SPECIFIC_FORCE_MPS2 = (4.0, 20.0)   # the median |f| near the ground: about 9.8

@@ -18,9 +18,9 @@ import numpy as np
 from alignment_core.geometry import earth
 from alignment_core.samples import DopplerSample, ImuSample, LdvSample, MasterSample
 
+from .column_units import LogError
 from .layout import read_map
 from .streams import ImuLog, MasterLog, StreamReport, VelocityLog, read_imu, read_master, read_velocity
-from .units import LogError
 
 START_NS = 1_000_000_000     # where times from 0 start (the scenarios' start_time_s)
 
