@@ -23,6 +23,7 @@ import copy
 from typing import Any
 
 from .column_units import LogError
+from .conventions import EULER_FRAMES
 
 STREAMS = ('imu', 'master', 'ldv', 'doppler')
 FILE_KEYS = ('header', 'delimiter', 'variable', 'names', 'time', 'time_unit')
@@ -73,9 +74,24 @@ def stream_layout(stream: str, given: dict[str, Any] | None) -> dict[str, Any]:
             raise LogError(f"map: imu.kind: {out['kind']!r}: expected increments or rates")
         out['gyro_unit'] = out['gyro_unit'] or ('rad' if inc else 'rad/s')
         out['accel_unit'] = out['accel_unit'] or ('m/s' if inc else 'm/s^2')
-    if stream == 'master' and out['attitude'] != 'quaternion' and 'euler' not in given:
-        raise LogError(f"map: master: attitude {out['attitude']!r} needs `euler: [roll, pitch, yaw]` columns")
+    if stream == 'master' and out['attitude'] != 'quaternion':
+        _euler_frames(out, given)
     return out
+
+
+def _euler_frames(out: dict[str, Any], given: dict[str, Any]) -> None:
+    """An Euler convention fixes the master's frames: nav_frame and body_axes (of the velocity,
+    the body rate) default to its own; LogError when the map gives others."""
+    att = out['attitude']
+    if att not in EULER_FRAMES:
+        raise LogError(f'map: master.attitude: {att!r}: expected quaternion or one of {", ".join(EULER_FRAMES)}')
+    if 'euler' not in given:
+        raise LogError(f"map: master: attitude {att!r} needs `euler: [roll, pitch, yaw]` columns")
+    for key, own in zip(('nav_frame', 'body_axes'), EULER_FRAMES[att]):
+        if key in given and given[key] != own:
+            raise LogError(f'map: master.{key}: {given[key]!r} contradicts attitude {att!r}, whose {key} '
+                           f'is {own} (leave {key} out: the convention sets it)')
+        out[key] = own
 
 
 def read_map(doc: dict[str, Any] | None) -> tuple[dict[str, dict[str, Any]], str | float]:
