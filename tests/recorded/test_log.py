@@ -170,3 +170,19 @@ def test_the_maps_of_the_docs_are_valid():
     assert len(blocks) == 3
     for b in blocks:
         read_map(yaml.safe_load(b))
+
+
+def test_a_skipped_increment_row_leaves_a_gap_and_the_next_row_its_own_interval(logs, tmp_path):
+    # every row: 0.001 rad/s and g over its own 10 ms; row 4 (line 5) NaN: rows 3 and 5 kept,
+    # 20 ms apart, and row 5's increment is still over its own 10 ms (rate 0.001, accel g, not half)
+    rows = imu_rows()
+    rows[3] = rows[3].replace(',0.0,0.0,', ',nan,0.0,', 1)
+    log = recording.load(write(tmp_path / 'i.csv', IMU_HEAD, rows), logs[1])
+    assert log.imu.t_ns[3] - log.imu.t_ns[2] == 20_000_000
+    assert log.imu.gyro[:, 0] == pytest.approx(np.full(19, 0.001), rel=1e-12)
+    assert log.imu.accel[:, 2] == pytest.approx(np.full(19, G0), rel=1e-12)
+    # a row whose time is missing: the next row's interval is unknown, the median spacing (10 ms)
+    rows = imu_rows()
+    rows[3] = ',' + rows[3].split(',', 1)[1]
+    log = recording.load(write(tmp_path / 'i.csv', IMU_HEAD, rows), logs[1])
+    assert log.imu.accel[:, 2] == pytest.approx(np.full(19, G0), rel=1e-12)

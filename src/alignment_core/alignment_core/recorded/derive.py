@@ -8,8 +8,10 @@
   (on the catapult scenario's ship motion at 100 Hz it matches the master's own rate to
   3.2e-9 rad/s, the master's gyro bias, which its attitude does not carry; a central
   difference leaves 3.6e-7 rad/s, which moves the estimate by 9e-6 rad with a 40 m lever arm).
-- Rates from increments: increment / interval (the interval ending at the stamp); the first
-  row's interval is the median one (the log does not say when it started).
+- Rates from increments: increment / interval (the interval ending at the stamp, from the
+  file's previous row even when that row is skipped: its increment is lost and its interval
+  stays a gap in the stamps, which the filter bridges); the first row's interval (and one
+  after a row without a time) is the median one (the log does not say when it started).
 """
 from __future__ import annotations
 
@@ -52,11 +54,15 @@ def median_interval_ns(t_ns: np.ndarray) -> int:
     return int(np.median(np.diff(t_ns)))
 
 
-def rates_from_increments(t_ns: np.ndarray, inc: np.ndarray) -> np.ndarray:
-    """Mean rates (N, 3) of increments (N, 3) over the intervals ending at t_ns (N,)."""
+def rates_from_increments(t_ns: np.ndarray, inc: np.ndarray, interval_ns: np.ndarray | None = None) -> np.ndarray:
+    """Mean rates (N, 3) of increments (N, 3) over the intervals ending at t_ns (N,).
+    `interval_ns` (N,): each row's own interval (from the file's previous row, kept or not);
+    without it, or where it is 0 (unknown), the stamp spacing, and the median one for the first."""
     dt_ns = np.empty(len(t_ns), dtype=np.int64)
     dt_ns[1:] = np.diff(t_ns)
     dt_ns[0] = median_interval_ns(t_ns)
+    if interval_ns is not None:
+        dt_ns = np.where(np.asarray(interval_ns) > 0, interval_ns, median_interval_ns(t_ns))
     return inc / (dt_ns * 1e-9)[:, None]
 
 

@@ -89,6 +89,7 @@ class _Reader:
                                        variable=lay['variable'], names=lay['names'])
         self.report = StreamReport(str(path))
         self.cols: dict[str, np.ndarray] = {}
+        self.interval_ns = np.zeros(0, dtype=np.int64)
 
     def take(self, key: str, n: int | None = 3) -> None:
         """Read the columns of layout key `key` (`n` of them, or one when None)."""
@@ -101,9 +102,12 @@ class _Reader:
         self.cols[key] = np.stack([self.table.floats(r, what) for r in refs], axis=-1)
 
     def finish(self, allow_nan: dict[str, np.ndarray] | None = None) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """(t_ns of the kept rows, the columns of the kept rows); NaN rows counted."""
+        """(t_ns of the kept rows, the columns of the kept rows); NaN rows counted. Sets
+        `interval_ns` (kept rows): the time since the file's previous row, skipped or not
+        (0: unknown, the first row or one after a row without a time)."""
         t = self.table.floats(self.lay['time'], f'{self.stream}.time')
-        ok = np.isfinite(t)
+        timed = np.isfinite(t)
+        ok = timed.copy()
         for key, c in self.cols.items():
             fine = np.all(np.isfinite(c), axis=-1)
             if allow_nan and key in allow_nan:
@@ -115,16 +119,19 @@ class _Reader:
         if ok.sum() < 2:
             raise LogError(f'{self.table.source}: {self.stream}: {int(ok.sum())} usable rows of {len(ok)} '
                            f'(at least 2 needed)')
-        t_ns = self.table.times_ns(self.lay['time'], self.lay['time_unit'], f'{self.stream}.time', ok)[ok]
-        lines = self.table.lines[ok]
-        bad = np.flatnonzero(np.diff(t_ns) <= 0)
+        t_all = self.table.times_ns(self.lay['time'], self.lay['time_unit'], f'{self.stream}.time', timed)
+        idx = np.flatnonzero(timed)
+        bad = np.flatnonzero(np.diff(t_all[idx]) <= 0)
         if len(bad):
-            where = '; '.join(f'{self.table.line_word} {lines[i + 1]} (t = {t_ns[i + 1] * 1e-9:.9g} s '
-                              f'after {t_ns[i] * 1e-9:.9g} s at {lines[i]})' for i in bad[:LISTED])
+            lines, ts = self.table.lines[idx], t_all[idx]
+            where = '; '.join(f'{self.table.line_word} {lines[i + 1]} (t = {ts[i + 1] * 1e-9:.9g} s '
+                              f'after {ts[i] * 1e-9:.9g} s at {lines[i]})' for i in bad[:LISTED])
             raise LogError(f'{self.table.source}: {self.stream}: time not increasing at {len(bad)} '
                            f'row(s): {where}')
-        self.report.rows = len(t_ns)
-        return t_ns, {k: c[ok] for k, c in self.cols.items()}
+        prev_timed = np.r_[False, timed[:-1]]
+        self.interval_ns = np.where(prev_timed, t_all - np.r_[0, t_all[:-1]], 0)[ok]
+        self.report.rows = int(ok.sum())
+        return t_all[ok], {k: c[ok] for k, c in self.cols.items()}
 
     def unit(self, key: str, quantity: str) -> float:
         return factor(self.lay[key], quantity, f'{self.table.source}: {self.stream}.{key}')
@@ -159,9 +166,9 @@ def read_imu(path: Path, lay: dict[str, Any]) -> ImuLog:
     a = conventions.body_to_flu(lay['body_axes'], r.where('body_axes'))
     gyro = c['gyro'] * r.unit('gyro_unit', 'angle' if inc else 'rate')
     accel = c['accel'] * r.unit('accel_unit', 'velocity' if inc else 'accel')
-    if inc:
-        gyro = derive.rates_from_increments(t_ns, gyro)
-        accel = derive.rates_from_increments(t_ns, accel)
+    if inc:     # a skipped row's increment is lost: its interval stays a gap in the stamps
+        gyro = derive.rates_from_increments(t_ns, gyro, r.interval_ns)
+        accel = derive.rates_from_increments(t_ns, accel, r.interval_ns)
     gyro, accel = gyro @ a.T, accel @ a.T
     _check_rate(r, 'gyro', gyro)
     f = float(np.median(np.linalg.norm(accel, axis=1)))
