@@ -9,7 +9,9 @@ Keys per stream (every stream: `time`, `time_unit`, and the file's `header`, `de
   `quaternion`, `quaternion_order`, `quaternion_inverse`, `euler` (roll, pitch, yaw columns),
   `euler_unit`, `velocity`, `velocity_frame` (nav | body), `velocity_unit`, `position`
   (latitude, longitude, height), `position_unit` (of latitude and longitude), `height_unit`,
-  `body_rate` (optional; derived from the attitude without it), `body_rate_unit`;
+  `body_rate` (optional; derived from the attitude without it), `body_rate_unit`,
+  `body_rate_frame` (nb: w_nb^b, w.r.t. the local-level frame, as /master/odom carries it;
+  ib: w_ib^b, an INS's gyro-frame rate, from which C_n^b (w_ie^n + w_en^n) is subtracted);
 - ldv (ship axes) and doppler (aircraft axes): `body_axes`, `velocity`, `velocity_unit`,
   `sigma` (a column, or a number with a decimal point: the sigma of every row; a negative
   sigma: no measurement in that row),
@@ -48,7 +50,8 @@ DEFAULTS: dict[str, dict[str, Any]] = {
             'gyro_unit': None, 'accel_unit': None},
     'master': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
                'quaternion_inverse': False, 'euler': None, 'euler_unit': 'rad', 'velocity_unit': 'm/s',
-               'height_unit': 'm', 'body_rate': None, 'body_rate_unit': 'rad/s'},
+               'height_unit': 'm', 'body_rate': None, 'body_rate_unit': 'rad/s',
+               'body_rate_frame': 'nb'},
     'ldv': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
             'velocity_unit': 'm/s', 'sigma_unit': 'm/s'},
     'doppler': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from alignment_core.geometry import earth
 from alignment_core.units import G0
 
 from . import conventions, derive
@@ -204,9 +205,11 @@ def read_master(path: Path, lay: dict[str, Any]) -> MasterLog:
     v = c['velocity'] * r.unit('velocity_unit', 'velocity')
     _check_speed(r, 'velocity', v)
     if lay['velocity_frame'] == 'nav':
-        v_b = derive.body_velocity(c_nb, v @ conventions.nav_to_enu(lay['nav_frame'], r.where('nav_frame')).T)
+        v_n = v @ conventions.nav_to_enu(lay['nav_frame'], r.where('nav_frame')).T
+        v_b = derive.body_velocity(c_nb, v_n)
     elif lay['velocity_frame'] == 'body':
         v_b = v @ conventions.body_to_flu(lay['body_axes'], r.where('body_axes')).T
+        v_n = np.einsum('nij,nj->ni', c_nb, v_b)
     else:
         raise LogError(f"{r.where('velocity_frame')}: {lay['velocity_frame']!r}: expected nav or body")
     ang = r.unit('position_unit', 'angle')
@@ -219,6 +222,11 @@ def read_master(path: Path, lay: dict[str, Any]) -> MasterLog:
         w_b = (c['body_rate'] * r.unit('body_rate_unit', 'rate')) @ conventions.body_to_flu(
             lay['body_axes'], r.where('body_axes')).T
         _check_rate(r, 'body_rate', w_b)
+        if lay['body_rate_frame'] == 'ib':      # w_nb^b = w_ib^b - C_n^b (w_ie^n + w_en^n)
+            w_b = w_b - derive.body_velocity(c_nb, earth.omega_ie_n(lat) + earth.omega_en_n(lat, h, v_n))
+        elif lay['body_rate_frame'] != 'nb':
+            raise LogError(f"{r.where('body_rate_frame')}: {lay['body_rate_frame']!r}: expected nb (w.r.t. "
+                           f"the local-level frame) or ib (w.r.t. inertial space)")
     else:
         w_b = derive.body_rate_from_attitude(t_ns, c_nb)
     return MasterLog(t_ns, conventions.dcm_to_quat(c_nb), v_b, w_b, lat, lon, h,
