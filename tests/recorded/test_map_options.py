@@ -74,3 +74,49 @@ def test_a_body_rate_column_wrt_inertial_space_loses_the_earth_and_transport_rat
     lay['master']['body_rate_frame'] = 'ie'
     with pytest.raises(LogError, match="body_rate_frame: 'ie': expected nb"):
         recording.load(imu, m, layout_map=lay)
+
+
+def test_upside_down_axes_are_warned(imu, tmp_path):
+    frd = write(tmp_path / 'frd.csv', IMU_HEAD, [f'{1 + (k + 1) * DT!r},0,0,0,0,0,{-G0 * DT!r}' for k in range(20)])
+    m = write(tmp_path / 'm.csv', MASTER_HEAD, [f'{1 + k * DT!r},1,0,0,0,0,0,0,40,116,0' for k in range(21)])
+    log = recording.load(frd, m)          # FRD increments declared FLU: |f| = g passes, f_z = -g does not
+    assert any('body up axis -9.807 m/s^2: the axes point down' in w for w in log.imu.report.warnings)
+    assert recording.load(frd, m, layout_map={'imu': {'body_axes': 'FRD'}}).imu.report.warnings == []
+    # a level FRD-in-NED quaternion (identity) declared FLU in NED: the body's up axis points down
+    lay = {'master': {'nav_frame': 'NED'}}
+    assert any('body up axis points down' in w for w in recording.load(imu, m, layout_map=lay).master.report.warnings)
+    lay = {'master': {'nav_frame': 'NED', 'body_axes': 'FRD'}}
+    assert recording.load(imu, m, layout_map=lay).master.report.warnings == []
+
+
+def turning_master(tmp_path, rate: float = 0.05):
+    """Level, turning about up at `rate` rad/s, 100 Hz, 2 s."""
+    half = [rate * k * DT / 2 for k in range(201)]
+    rows = [f'{1 + k * DT!r},{float(np.cos(a))!r},0,0,{float(np.sin(a))!r},0,0,0,40,116,0' for k, a in enumerate(half)]
+    return write(tmp_path / 'turn.csv', MASTER_HEAD, rows)
+
+
+def test_slave_rates_far_from_the_masters_are_warned(tmp_path):
+    m = turning_master(tmp_path)       # 0.05 rad/s = 2.86 deg/s: under the 3 rad/s limit when read as rad/s
+    head = 't,gx,gy,gz,ax,ay,az'
+    deg = write(tmp_path / 'd.csv', head, [f'{1 + k * DT!r},0,0,{0.05 / DEG!r},0,0,1' for k in range(1, 201)])
+    lay = {'imu': {'time': 't', 'kind': 'rates', 'gyro': ['gx', 'gy', 'gz'], 'accel': ['ax', 'ay', 'az'],
+                   'accel_unit': 'g'}}
+    w = recording.load(deg, m, layout_map=lay).imu.report.warnings
+    assert len(w) == 1 and 'rms rate 57.3 times the master' in w[0] and 'deg/s given as rad/s?' in w[0]
+    rad = write(tmp_path / 'r.csv', head, [f'{1 + k * DT!r},0,0,0.05,0,0,1' for k in range(1, 201)])
+    lay['imu']['gyro_unit'] = 'deg/s'
+    w = recording.load(rad, m, layout_map=lay).imu.report.warnings
+    assert len(w) == 1 and 'rad/s given as deg/s?' in w[0]
+    del lay['imu']['gyro_unit']
+    assert recording.load(rad, m, layout_map=lay).imu.report.warnings == []
+
+
+def test_times_in_ms_declared_as_seconds_are_warned(tmp_path):
+    imu = write(tmp_path / 'i.csv', IMU_HEAD, [f'{1000 + (k + 1) * 10},0,0,0,0,0,{G0 * DT!r}' for k in range(20)])
+    m = write(tmp_path / 'm.csv', MASTER_HEAD, [f'{1000 + k * 10},1,0,0,0,0,0,0,40,116,0' for k in range(21)])
+    w = recording.load(imu, m).imu.report.warnings
+    assert any('median spacing 10 s (0.1 Hz) after conversion from s: is time_unit right' in x for x in w)
+    log = recording.load(imu, m, layout_map={'imu': {'time_unit': 'ms'}, 'master': {'time_unit': 'ms'}})
+    assert log.imu.report.warnings == [] and log.imu.t_ns[0] == 1_010_000_000
+    assert log.imu.accel[0, 2] == pytest.approx(G0)

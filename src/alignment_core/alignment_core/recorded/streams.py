@@ -23,6 +23,7 @@ from .table import Table, read_table
 MAX_RATE_RADPS = 3.0        # a larger body rate (p99) suggests deg/s given as rad/s
 SPECIFIC_FORCE_MPS2 = (4.0, 20.0)   # the median |f| near the ground: about 9.8
 MAX_SPEED_MPS = 400.0
+IMU_SPACING_S = (1e-4, 1.0)     # an IMU runs at 1 Hz to 10 kHz
 LISTED = 5                  # line numbers quoted in a message
 
 
@@ -172,6 +173,14 @@ def read_imu(path: Path, lay: dict[str, Any]) -> ImuLog:
         accel = derive.rates_from_increments(t_ns, accel, r.interval_ns)
     gyro, accel = gyro @ a.T, accel @ a.T
     _check_rate(r, 'gyro', gyro)
+    spacing = derive.median_interval_ns(t_ns) * 1e-9
+    if not IMU_SPACING_S[0] <= spacing <= IMU_SPACING_S[1]:
+        r.warn(f'time: median spacing {spacing:.6g} s ({1 / spacing:.6g} Hz) after conversion from '
+               f'{lay["time_unit"]}: is time_unit right (ms given as s?)')
+    f_up = float(np.median(accel[:, 2]))
+    if f_up < 0.0:
+        r.warn(f'accel: median specific force along the body up axis {f_up:.4g} m/s^2: the axes point '
+               f'down (FRD declared as {lay["body_axes"]}?)')
     f = float(np.median(np.linalg.norm(accel, axis=1)))
     if not SPECIFIC_FORCE_MPS2[0] <= f <= SPECIFIC_FORCE_MPS2[1]:
         r.warn(f'accel: median specific force {f:.4g} m/s^2 ({f / G0:.4g} g) after conversion from '
@@ -182,8 +191,13 @@ def read_imu(path: Path, lay: dict[str, Any]) -> ImuLog:
 
 def _attitude(r: _Reader, lay: dict[str, Any], c: dict[str, np.ndarray]) -> np.ndarray:
     if lay['attitude'] == 'quaternion':
-        return conventions.quaternion_dcm(c['quaternion'], lay['quaternion_order'], lay['nav_frame'],
+        c_nb = conventions.quaternion_dcm(c['quaternion'], lay['quaternion_order'], lay['nav_frame'],
                                           lay['body_axes'], r.where('quaternion'), bool(lay['quaternion_inverse']))
+        up = float(np.median(c_nb[:, 2, 2]))
+        if up < 0.0:
+            r.warn(f'quaternion: the body up axis points down (median up component {up:.3g}): are body_axes '
+                   f'({lay["body_axes"]}), nav_frame ({lay["nav_frame"]}) and quaternion_inverse right?')
+        return c_nb
     e = c['euler'] * r.unit('euler_unit', 'angle')
     if lay['euler_unit'] == 'rad' and float(np.max(np.abs(e))) > 2 * np.pi + 0.1:
         r.warn(f'euler: angles up to {float(np.max(np.abs(e))):.4g} rad: are they degrees (euler_unit: deg)?')
