@@ -120,3 +120,19 @@ def test_times_in_ms_declared_as_seconds_are_warned(tmp_path):
     log = recording.load(imu, m, layout_map={'imu': {'time_unit': 'ms'}, 'master': {'time_unit': 'ms'}})
     assert log.imu.report.warnings == [] and log.imu.t_ns[0] == 1_010_000_000
     assert log.imu.accel[0, 2] == pytest.approx(G0)
+
+
+def test_rates_sampled_at_the_stamps_become_interval_means(tmp_path):
+    # a rate linear in time, w(t) = 0.01 + 0.5 (t - 1) rad/s, sampled at t_k: its mean over
+    # (t_k - dt, t_k] is w(t_k - dt / 2); RFU axes: the x column is the FLU -y, the y column FLU +x
+    m = write(tmp_path / 'm.csv', MASTER_HEAD, [f'{1 + k * DT!r},1,0,0,0,0,0,0,40,116,0' for k in range(21)])
+    t = (1 + DT * np.arange(1, 21)).tolist()
+    w = [0.01 + 0.5 * (x - 1) for x in t]
+    path = write(tmp_path / 'i.csv', 't,wx,wy,wz,ax,ay,az', [f'{t[k]!r},{w[k]!r},0,0,0,0,{G0!r}' for k in range(20)])
+    lay = {'imu': {'time': 't', 'kind': 'rates', 'rate_sampling': 'instant', 'body_axes': 'RFU',
+                   'gyro': ['wx', 'wy', 'wz'], 'accel': ['ax', 'ay', 'az']}}
+    gyro = recording.load(path, m, layout_map=lay).imu.gyro
+    assert gyro[1:, 1] == pytest.approx([-(0.01 + 0.5 * (x - DT / 2 - 1)) for x in t[1:]], rel=1e-12)
+    assert gyro[0, 1] == pytest.approx(-w[0]) and np.all(gyro[:, [0, 2]] == 0.0)     # the first: as sampled
+    lay['imu']['rate_sampling'] = 'mean'                                  # the default: taken as they are
+    assert recording.load(path, m, layout_map=lay).imu.gyro[:, 1] == pytest.approx([-x for x in w], rel=1e-15)

@@ -11,6 +11,8 @@
   Attitude noise sigma (rad, white) becomes rate noise sigma sqrt(130) / (12 dt) inside the
   log and sigma sqrt(4490) / (12 dt) at its ends: 0.95 / dt and 5.6 / dt. A stencil does not
   reach across a gap of more than GAP_SPACINGS median spacings.
+- Rates sampled at the stamps (`rate_sampling: instant`) -> means over the interval ending at
+  the stamp, as the filter takes them: the trapezoid of each sample and the one before it.
 - Rates from increments: increment / interval (the interval ending at the stamp, from the
   file's previous row even when that row is skipped: its increment is lost and its interval
   stays a gap in the stamps, which the filter bridges); the first row's interval (and one
@@ -86,6 +88,16 @@ def rates_from_increments(t_ns: np.ndarray, inc: np.ndarray, interval_ns: np.nda
     if interval_ns is not None:
         dt_ns = np.where(np.asarray(interval_ns) > 0, interval_ns, median_interval_ns(t_ns))
     return inc / (dt_ns * 1e-9)[:, None]
+
+
+def interval_means(x: np.ndarray, previous: np.ndarray) -> np.ndarray:
+    """Means (N, 3) over the intervals ending at the stamps of rates x (N, 3) sampled at them:
+    the trapezoid (x[k-1] + x[k]) / 2 (exact for a rate linear in time) where `previous` (N,)
+    says row k - 1 is the file's previous row; elsewhere x[k] itself."""
+    out = np.array(x, dtype=float)
+    both = np.flatnonzero(previous)
+    out[both] = 0.5 * (x[both - 1] + x[both])
+    return out
 
 
 def rate_hz_of(t_ns: np.ndarray) -> float:

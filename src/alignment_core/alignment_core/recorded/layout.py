@@ -4,7 +4,8 @@ YAML file, read into a dict) replaces any of its keys, per stream.
 
 Keys per stream (every stream: `time`, `time_unit`, and the file's `header`, `delimiter`,
 `variable` and `names` for a .mat matrix):
-- imu: `kind` (increments | rates), `body_axes`, `gyro`, `gyro_unit`, `accel`, `accel_unit`;
+- imu: `kind` (increments | rates), `rate_sampling` (rates: mean over the interval ending at
+  the stamp, or instant: sampled at the stamp), `body_axes`, `gyro`, `gyro_unit`, `accel`, `accel_unit`;
 - master: `body_axes`, `nav_frame`, `attitude` (quaternion | an Euler convention),
   `quaternion`, `quaternion_order`, `quaternion_inverse`, `euler` (roll, pitch, yaw columns),
   `euler_unit`, `velocity`, `velocity_frame` (nav | body), `velocity_unit`, `position`
@@ -47,7 +48,7 @@ CANONICAL: dict[str, dict[str, Any]] = {
 
 DEFAULTS: dict[str, dict[str, Any]] = {
     'imu': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
-            'gyro_unit': None, 'accel_unit': None},
+            'gyro_unit': None, 'accel_unit': None, 'rate_sampling': 'mean'},
     'master': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
                'quaternion_inverse': False, 'euler': None, 'euler_unit': 'rad', 'velocity_unit': 'm/s',
                'height_unit': 'm', 'body_rate': None, 'body_rate_unit': 'rad/s',

@@ -92,6 +92,7 @@ class _Reader:
         self.report = StreamReport(str(path))
         self.cols: dict[str, np.ndarray] = {}
         self.interval_ns = np.zeros(0, dtype=np.int64)
+        self.previous_kept = np.zeros(0, dtype=bool)
 
     def take(self, key: str, n: int | None = 3) -> None:
         """Read the columns of layout key `key` (`n` of them, or one when None)."""
@@ -132,6 +133,7 @@ class _Reader:
                            f'row(s): {where}')
         prev_timed = np.r_[False, timed[:-1]]
         self.interval_ns = np.where(prev_timed, t_all - np.r_[0, t_all[:-1]], 0)[ok]
+        self.previous_kept = np.r_[False, ok[:-1]][ok]
         self.report.rows = int(ok.sum())
         return t_all[ok], {k: c[ok] for k, c in self.cols.items()}
 
@@ -171,6 +173,12 @@ def read_imu(path: Path, lay: dict[str, Any]) -> ImuLog:
     if inc:     # a skipped row's increment is lost: its interval stays a gap in the stamps
         gyro = derive.rates_from_increments(t_ns, gyro, r.interval_ns)
         accel = derive.rates_from_increments(t_ns, accel, r.interval_ns)
+    elif lay['rate_sampling'] == 'instant':
+        gyro = derive.interval_means(gyro, r.previous_kept)
+        accel = derive.interval_means(accel, r.previous_kept)
+    elif lay['rate_sampling'] != 'mean':
+        raise LogError(f"{r.where('rate_sampling')}: {lay['rate_sampling']!r}: expected mean (over the "
+                       f"interval ending at the stamp) or instant (sampled at the stamp)")
     gyro, accel = gyro @ a.T, accel @ a.T
     _check_rate(r, 'gyro', gyro)
     spacing = derive.median_interval_ns(t_ns) * 1e-9
