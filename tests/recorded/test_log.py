@@ -154,8 +154,14 @@ def test_ldv_rows_without_a_measurement(logs, tmp_path):
     v = recording.load(*logs, ldv=ldv).ldv
     assert list(v.valid) == [True, False, True] and v.report.skipped == 1     # the NaN row with a sigma
     assert v.v[1] == pytest.approx([0, 0, 0]) and np.isnan(v.sigma[1])
-    v = recording.load(*logs, ldv=ldv, layout_map={'ldv': {'sigma': 0.02}}).ldv
-    assert v.sigma == pytest.approx([0.02, 0.02]) and v.report.skipped == 2
+    v = recording.load(*logs, ldv=ldv, layout_map={'ldv': {'sigma_mps': 0.02, 'sigma_unit': 'ft/s'}}).ldv
+    assert v.sigma == pytest.approx([0.02, 0.02]) and v.report.skipped == 2     # sigma_mps: m/s whatever the unit
+    v = recording.load(*logs, ldv=ldv, layout_map={'ldv': {'sigma': 1}}).ldv    # an integer: column 1
+    assert v.sigma == pytest.approx([0.1, 0.2]) and list(v.valid) == [True, True]
+    with pytest.raises(LogError, match=r'ldv.sigma: 0.02: a column .* is `sigma_mps: 0.02`'):
+        recording.load(*logs, ldv=ldv, layout_map={'ldv': {'sigma': 0.02}})
+    with pytest.raises(LogError, match='sigma .a column. and sigma_mps .one for every row. both given'):
+        recording.load(*logs, ldv=ldv, layout_map={'ldv': {'sigma': 'sigma_mps', 'sigma_mps': 0.02}})
 
 
 def test_the_maps_of_the_docs_are_valid():

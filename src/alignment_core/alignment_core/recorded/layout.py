@@ -14,9 +14,8 @@ Keys per stream (every stream: `time`, `time_unit`, and the file's `header`, `de
   `body_rate_frame` (nb: w_nb^b, w.r.t. the local-level frame, as /master/odom carries it;
   ib: w_ib^b, an INS's gyro-frame rate, from which C_n^b (w_ie^n + w_en^n) is subtracted);
 - ldv (ship axes) and doppler (aircraft axes): `body_axes`, `velocity`, `velocity_unit`,
-  `sigma` (a column, or a number with a decimal point: the sigma of every row; a negative
-  sigma: no measurement in that row),
-  `sigma_unit`.
+  `sigma` (a column by name or 0-based index; a negative sigma: no measurement in that row),
+  `sigma_unit`, or `sigma_mps` (one sigma, m/s, for every row).
 Top level: `time_offset_s` (`auto`: shift the times so that they start at 1 s when they
 start at or below 0, else keep them; or a number of seconds added to every stamp).
 """
@@ -54,9 +53,9 @@ DEFAULTS: dict[str, dict[str, Any]] = {
                'height_unit': 'm', 'body_rate': None, 'body_rate_unit': 'rad/s',
                'body_rate_frame': 'nb'},
     'ldv': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
-            'velocity_unit': 'm/s', 'sigma_unit': 'm/s'},
+            'velocity_unit': 'm/s', 'sigma_unit': 'm/s', 'sigma_mps': None},
     'doppler': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
-                'velocity_unit': 'm/s', 'sigma_unit': 'm/s'},
+                'velocity_unit': 'm/s', 'sigma_unit': 'm/s', 'sigma_mps': None},
 }
 """Keys the canonical layout leaves implicit (units of increments follow `kind`)."""
 
@@ -80,7 +79,24 @@ def stream_layout(stream: str, given: dict[str, Any] | None) -> dict[str, Any]:
         out['accel_unit'] = out['accel_unit'] or ('m/s' if inc else 'm/s^2')
     if stream == 'master' and out['attitude'] != 'quaternion':
         _euler_frames(out, given)
+    if stream in ('ldv', 'doppler'):
+        _sigma(stream, out, given)
     return out
+
+
+def _sigma(stream: str, out: dict[str, Any], given: dict[str, Any]) -> None:
+    """`sigma` is a column (name or 0-based index); `sigma_mps` one sigma (m/s) for every row."""
+    if isinstance(given.get('sigma'), float):
+        raise LogError(f"map: {stream}.sigma: {given['sigma']!r}: a column (name or 0-based index); one sigma "
+                       f"for every row is `sigma_mps: {given['sigma']!r}`")
+    if given.get('sigma_mps') is None:
+        return
+    s = given['sigma_mps']
+    if 'sigma' in given:
+        raise LogError(f'map: {stream}: sigma (a column) and sigma_mps (one for every row) both given')
+    if isinstance(s, bool) or not isinstance(s, (int, float)) or not s > 0.0:
+        raise LogError(f'map: {stream}.sigma_mps: expected a positive number of m/s, got {s!r}')
+    out['sigma'] = None
 
 
 def _euler_frames(out: dict[str, Any], given: dict[str, Any]) -> None:

@@ -259,16 +259,15 @@ def read_velocity(stream: str, path: Path, lay: dict[str, Any]) -> VelocityLog:
     """The LDV (ship axes) or Doppler radar (aircraft axes) stream."""
     r = _Reader(stream, path, lay)
     r.take('velocity')
-    sigma_col = not isinstance(lay['sigma'], float)     # a float: one sigma for every row
-    if sigma_col:
+    if lay['sigma'] is not None:
         r.take('sigma', None)
         missing = r.cols['sigma'][:, 0] < 0.0
         t_ns, c = r.finish({'velocity': missing})
         sigma = c['sigma'][:, 0]
-    else:
+        sigma = np.where(sigma < 0.0, -1.0, sigma * r.unit('sigma_unit', 'velocity'))
+    else:                               # one sigma, m/s, for every row
         t_ns, c = r.finish()
-        sigma = np.full(len(t_ns), float(lay['sigma']))
-    sigma = np.where(sigma < 0.0, -1.0, sigma * r.unit('sigma_unit', 'velocity'))
+        sigma = np.full(len(t_ns), float(lay['sigma_mps']))
     valid = sigma >= 0.0
     v = c['velocity'] * r.unit('velocity_unit', 'velocity')
     v = np.where(valid[:, None], v @ conventions.body_to_flu(lay['body_axes'], r.where('body_axes')).T, 0.0)
