@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.io import savemat
+from scipy.spatial.transform import Rotation
 
 from alignment_core.recorded import recording
 from alignment_core.recorded.column_units import LogError
@@ -136,3 +138,68 @@ def test_rates_sampled_at_the_stamps_become_interval_means(tmp_path):
     assert gyro[0, 1] == pytest.approx(-w[0]) and np.all(gyro[:, [0, 2]] == 0.0)     # the first: as sampled
     lay['imu']['rate_sampling'] = 'mean'                                  # the default: taken as they are
     assert recording.load(path, m, layout_map=lay).imu.gyro[:, 1] == pytest.approx([-x for x in w], rel=1e-15)
+
+
+def docs_map(word: str) -> dict:
+    """The example map of docs/own-data.md that contains `word`."""
+    import re
+    from pathlib import Path
+
+    import yaml
+    text = (Path(__file__).resolve().parents[2] / 'docs/own-data.md').read_text()
+    blocks = [b for b in re.findall(r'```yaml\n(.*?)```', text, re.S) if word in b]
+    assert len(blocks) == 1
+    return yaml.safe_load(blocks[0])
+
+
+def test_the_docs_papers_map_on_space_delimited_files_without_a_header(tmp_path):
+    # RFU increments in arcsec: 0.36" per 10 ms about the forward (RFU y) axis = FLU x, 36"/s
+    imu = tmp_path / 'imu.txt'
+    imu.write_text(''.join(f'{1 + (k + 1) * DT!r} 0 0.36 0 0 0 {G0 * DT!r}\n' for k in range(20)))
+    # pitch 10, roll 0, yaw 30 deg (north-west positive): the nose 30 deg West of North, 10 deg up;
+    # the file holds pitch, roll, yaw (the map reorders them); ENU velocity (1, 2, 3)
+    master = tmp_path / 'master.txt'
+    master.write_text(''.join(f'{1 + k * DT!r}  10 0 30  1 2 3  40 116 5\n' for k in range(21)))
+    lay = docs_map('enu_rfu_312')
+    log = recording.load(imu, master, layout_map=lay)
+    assert log.imu.gyro[0] == pytest.approx([36 * DEG / 3600, 0, 0], rel=1e-12, abs=1e-18)
+    assert log.imu.accel[0] == pytest.approx([0, 0, G0], rel=1e-12)
+    th, ps = 10 * DEG, 30 * DEG
+    nose = np.array([-np.sin(ps) * np.cos(th), np.cos(ps) * np.cos(th), np.sin(th)])
+    c = Rotation.from_quat(log.master.q_nb[0]).as_matrix()
+    assert c[:, 0] == pytest.approx(nose, abs=1e-15)
+    assert log.master.v_b[0, 0] == pytest.approx(nose @ [1.0, 2.0, 3.0], abs=1e-12)
+    assert (log.master.lat[0], log.master.h[0]) == pytest.approx((40 * DEG, 5.0))
+    lay['master']['yaw_negated'] = True        # a clockwise heading: 30 deg East of North
+    c = Rotation.from_quat(recording.load(imu, master, layout_map=lay).master.q_nb[0]).as_matrix()
+    assert c[:, 0] == pytest.approx([np.sin(ps) * np.cos(th), np.cos(ps) * np.cos(th), np.sin(th)], abs=1e-15)
+
+
+def test_the_docs_mat_map_on_mat_files(tmp_path):
+    t = 1.0 + DT * np.arange(21)
+    # IMU matrix: t, gyro deg/s, accel g, FRD: 0.1 deg/s about forward, 1 g up (FRD z = -1 g)
+    savemat(tmp_path / 'imu.mat', {'IMU': np.column_stack([t[1:], np.tile([0.1, 0, 0, 0, 0, -1.0], (20, 1))])})
+    # master vectors: FRD-in-NED quaternion of heading East (90 deg about down), NED velocity (10, 0, 1)
+    h = float(np.sqrt(0.5))
+    cols = {'t': t, 'q0': np.full(21, h), 'q1': np.zeros(21), 'q2': np.zeros(21), 'q3': np.full(21, h),
+            'vn': np.full(21, 10.0), 've': np.zeros(21), 'vd': np.ones(21),
+            'lat': np.full(21, 40.0), 'lon': np.full(21, 116.0), 'h': np.zeros(21)}
+    savemat(tmp_path / 'master.mat', cols)
+    log = recording.load(tmp_path / 'imu.mat', tmp_path / 'master.mat', layout_map=docs_map('variable: IMU'))
+    assert log.imu.gyro[0] == pytest.approx([0.1 * DEG, 0, 0], abs=1e-18)
+    assert log.imu.accel[0] == pytest.approx([0, 0, G0], abs=1e-12)
+    assert Rotation.from_quat(log.master.q_nb[0]).as_matrix() == pytest.approx(np.eye(3), abs=1e-15)  # FLU = ENU
+    assert log.master.v_b[0] == pytest.approx([0.0, 10.0, -1.0], abs=1e-12)
+    assert log.imu.report.warnings == [] and log.master.report.warnings == []
+
+
+def test_an_inverse_quaternion_and_a_body_frame_velocity(imu, tmp_path):
+    # C_n^b of heading North (90 deg about up): its conjugate (h, 0, 0, -h); body velocity (5, 0.5, 0) FLU
+    m = write(tmp_path / 'm.csv', MASTER_HEAD, [f'{1 + k * DT!r},{H!r},0,0,{-H!r},5,0.5,0,40,116,0' for k in range(21)])
+    lay = {'master': {'quaternion_inverse': True, 'velocity_frame': 'body'}}
+    log = recording.load(imu, m, layout_map=lay).master
+    assert Rotation.from_quat(log.q_nb[0]).as_matrix()[:, 0] == pytest.approx([0.0, 1.0, 0.0], abs=1e-15)
+    assert log.v_b[0] == pytest.approx([5.0, 0.5, 0.0], abs=1e-15)
+    m = write(tmp_path / 'm.csv', MASTER_HEAD, [f'{1 + k * DT!r},1,0,0,0,0,0,0,0.7,116,0' for k in range(21)])
+    with pytest.raises(LogError, match='longitude beyond 360 deg after conversion from rad'):   # 116 rad
+        recording.load(imu, m, layout_map={'master': {'position_unit': 'rad'}})

@@ -8,7 +8,8 @@ Keys per stream (every stream: `time`, `time_unit`, and the file's `header`, `de
   the stamp, or instant: sampled at the stamp), `body_axes`, `gyro`, `gyro_unit`, `accel`, `accel_unit`;
 - master: `body_axes`, `nav_frame`, `attitude` (quaternion | an Euler convention),
   `quaternion`, `quaternion_order`, `quaternion_inverse`, `euler` (roll, pitch, yaw columns),
-  `euler_unit`, `velocity`, `velocity_frame` (nav | body), `velocity_unit`, `position`
+  `euler_unit`, `yaw_negated` (the log's yaw is the convention's negated: a clockwise heading
+  in an enu_rfu_312 log), `velocity`, `velocity_frame` (nav | body), `velocity_unit`, `position`
   (latitude, longitude, height), `position_unit` (of latitude and longitude), `height_unit`,
   `body_rate` (optional; derived from the attitude without it), `body_rate_unit`,
   `body_rate_frame` (nb: w_nb^b, w.r.t. the local-level frame, as /master/odom carries it;
@@ -49,8 +50,8 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     'imu': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
             'gyro_unit': None, 'accel_unit': None, 'rate_sampling': 'mean'},
     'master': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
-               'quaternion_inverse': False, 'euler': None, 'euler_unit': 'rad', 'velocity_unit': 'm/s',
-               'height_unit': 'm', 'body_rate': None, 'body_rate_unit': 'rad/s',
+               'quaternion_inverse': False, 'euler': None, 'euler_unit': 'rad', 'yaw_negated': False,
+               'velocity_unit': 'm/s', 'height_unit': 'm', 'body_rate': None, 'body_rate_unit': 'rad/s',
                'body_rate_frame': 'nb'},
     'ldv': {'time_unit': 's', 'header': True, 'delimiter': None, 'variable': None, 'names': None,
             'velocity_unit': 'm/s', 'sigma_unit': 'm/s', 'sigma_mps': None},

@@ -209,7 +209,10 @@ def _attitude(r: _Reader, lay: dict[str, Any], c: dict[str, np.ndarray]) -> np.n
     e = c['euler'] * r.unit('euler_unit', 'angle')
     if lay['euler_unit'] == 'rad' and float(np.max(np.abs(e))) > 2 * np.pi + 0.1:
         r.warn(f'euler: angles up to {float(np.max(np.abs(e))):.4g} rad: are they degrees (euler_unit: deg)?')
-    return conventions.euler_dcm(lay['attitude'], e[:, 0], e[:, 1], e[:, 2], r.where('attitude'))
+    if not isinstance(lay['yaw_negated'], bool):
+        raise LogError(f"{r.where('yaw_negated')}: expected true or false, got {lay['yaw_negated']!r}")
+    yaw = -e[:, 2] if lay['yaw_negated'] else e[:, 2]
+    return conventions.euler_dcm(lay['attitude'], e[:, 0], e[:, 1], yaw, r.where('attitude'))
 
 
 def read_master(path: Path, lay: dict[str, Any]) -> MasterLog:
@@ -239,6 +242,9 @@ def read_master(path: Path, lay: dict[str, Any]) -> MasterLog:
     h = c['position'][:, 2] * r.unit('height_unit', 'length')
     if np.any(np.abs(lat) > np.pi / 2):
         raise LogError(f"{r.where('position')}: latitude beyond 90 deg after conversion from "
+                       f"{lay['position_unit']} (degrees given as rad?)")
+    if np.any(np.abs(lon) > 2 * np.pi):
+        raise LogError(f"{r.where('position')}: longitude beyond 360 deg after conversion from "
                        f"{lay['position_unit']} (degrees given as rad?)")
     if lay['body_rate'] is not None:
         w_b = (c['body_rate'] * r.unit('body_rate_unit', 'rate')) @ conventions.body_to_flu(
