@@ -10,29 +10,18 @@ import numpy as np
 import pytest
 import yaml
 from rclpy.serialization import deserialize_message
-from scipy.spatial.transform import Rotation
+from support.recorded_layouts import AEROSPACE_MAP, write_aerospace
 
 from alignment_core import pipeline
 from alignment_core.config import scenario as core_scenario
 from alignment_core.estimation.engine import TransferAlignment
-from alignment_core.geometry.rotations import quat_to_dcm
 from alignment_core.recorded import export, recording
-from alignment_core.units import DEG, G0
+from alignment_core.units import DEG
 from alignment_ros import convert, importer, topics
 from alignment_ros.bag import BagReader
 from alignment_ros.replay import replay_topics
 
 SETS = ['duration_s=14.0', 'aircraft.catapult.launch_time_s=8.0']
-FRD = np.diag([1.0, -1.0, -1.0])                       # v_FRD = FRD @ v_FLU
-NED = np.array([[0, 1.0, 0], [1.0, 0, 0], [0, 0, -1.0]])   # v_NED = NED @ v_ENU
-AEROSPACE_MAP = {
-    'imu': {'time': 'time', 'kind': 'rates', 'body_axes': 'FRD', 'gyro': ['p', 'q', 'r'], 'gyro_unit': 'deg/s',
-            'accel': ['fx', 'fy', 'fz'], 'accel_unit': 'g'},
-    'master': {'time': 'time', 'body_axes': 'FRD', 'nav_frame': 'NED', 'attitude': 'ned_frd_321',
-               'euler': ['roll', 'pitch', 'yaw'], 'euler_unit': 'deg', 'velocity': ['vn', 've', 'vd'],
-               'position': ['lat', 'lon', 'alt']},
-    'ldv': {'time': 'time', 'body_axes': 'FRD', 'velocity': ['u', 'v', 'w'], 'sigma': 'sd'},
-}
 
 
 @pytest.fixture(scope='module')
@@ -40,34 +29,6 @@ def run():
     sc = core_scenario.load('catapult', core_scenario.parse_overrides(SETS))
     inp = pipeline.simulate(sc)
     return sc, inp, pipeline.align(sc, inp)
-
-
-def _t(t_ns: int, t0_ns: int) -> str:
-    return export.seconds(t_ns - t0_ns)
-
-
-def _write(path, head: str, rows: list[list]) -> None:
-    path.write_text(head + '\n' + '\n'.join(','.join(x if isinstance(x, str) else repr(float(x)) for x in r)
-                                            for r in rows) + '\n')
-
-
-def write_aerospace(d, sc, inp) -> None:
-    """The second layout, written here from the samples (not by the importer's code)."""
-    plane = pipeline.plane_of(sc)
-    t0 = sc.t0_ns                                  # the first stamp: times from 0
-    _write(d / 'imu.csv', 'time,p,q,r,fx,fy,fz',
-           [[_t(s.t_ns, t0), *(FRD @ s.gyro / DEG), *(FRD @ s.accel / G0)] for s in inp.imu])
-    rows = []
-    for m in inp.master:
-        c_ned_frd = NED @ quat_to_dcm(m.q_nb) @ FRD.T
-        yaw, pitch, roll = Rotation.from_matrix(c_ned_frd).as_euler('ZYX', degrees=True)
-        lat, lon, h = plane.to_geodetic(m.p_w)
-        rows.append([_t(m.t_ns, t0), roll, pitch, yaw, *(NED @ quat_to_dcm(m.q_nb) @ m.v_b),
-                     np.degrees(lat), np.degrees(lon), h])
-    _write(d / 'master.csv', 'time,roll,pitch,yaw,vn,ve,vd,lat,lon,alt', rows)
-    _write(d / 'ldv.csv', 'time,u,v,w,sd',
-           [[_t(s.t_ns, t0), *(FRD @ s.v_s), s.sigma] if s.valid else [_t(s.t_ns, t0), '', '', '', '-1']
-            for s in inp.ldv])
 
 
 def write_canonical(d, sc, inp) -> None:
