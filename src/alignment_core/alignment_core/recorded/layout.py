@@ -6,7 +6,8 @@ Keys per stream (every stream: `time`, `time_unit`, and the file's `header`, `de
 `variable` and `names` for a .mat matrix):
 - imu: `kind` (increments | rates), `rate_sampling` (rates: mean over the interval ending at
   the stamp, or instant: sampled at the stamp), `body_axes`, `gyro`, `gyro_unit`, `accel`, `accel_unit`;
-- master: `body_axes`, `nav_frame`, `attitude` (quaternion | an Euler convention),
+- master: `body_axes`, `nav_frame` (an Euler convention sets both), `attitude` (quaternion |
+  an Euler convention),
   `quaternion`, `quaternion_order`, `quaternion_inverse`, `euler` (roll, pitch, yaw columns),
   `euler_unit`, `yaw_negated` (the log's yaw is the convention's negated: a clockwise heading
   in an enu_rfu_312 log), `velocity`, `velocity_frame` (nav | body), `velocity_unit`, `position`

@@ -3,7 +3,8 @@
 Rows with a NaN (or empty cell) in a column the layout uses are skipped and counted (an LDV
 or Doppler row whose sigma is negative, no measurement, may leave its velocity empty); a time
 that does not increase is an error naming the lines; a column whose magnitude suggests
-another unit gives a warning (the conversion still follows the layout).
+another unit, or axes that point down, give a warning (the conversion still follows the
+layout). A skipped IMU row's interval stays a gap: the next row keeps its own interval.
 """
 from __future__ import annotations
 
