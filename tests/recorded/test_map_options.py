@@ -111,7 +111,9 @@ def test_slave_rates_far_from_the_masters_are_warned(tmp_path):
     w = recording.load(rad, m, layout_map=lay).imu.report.warnings
     assert len(w) == 1 and 'rad/s given as deg/s?' in w[0]
     del lay['imu']['gyro_unit']
-    assert recording.load(rad, m, layout_map=lay).imu.report.warnings == []
+    log = recording.load(rad, m, layout_map=lay)
+    assert log.imu.report.warnings == []
+    assert log.master.rate_derived and log.master.w_b == pytest.approx(np.tile([0, 0, 0.05], (201, 1)), abs=1e-12)
 
 
 def test_times_in_ms_declared_as_seconds_are_warned(tmp_path):

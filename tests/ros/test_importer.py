@@ -115,3 +115,24 @@ def test_a_doppler_log_becomes_its_topic(run, tmp_path):
     assert [s.valid for s in d] == [True, False, True] and d[0].sigma == pytest.approx(0.05)
     assert list(d[2].v_b) == [0.1, 0.2, 0.3] and d[0].t_ns == 1_500_000_000
     assert topics.LDV_TWIST not in BagReader(tmp_path / 'bag').topics()
+
+
+def test_the_docs_aerospace_map_reads_the_aerospace_layout(run, tmp_path):
+    # the docs' example map (frames from the convention, one LDV sigma for every row) on the
+    # aerospace files: the same streams as the tests' map, the LDV sigma the scenario's 0.01 m/s
+    import re
+    from pathlib import Path
+    sc, inp, _ = run
+    write_aerospace(tmp_path, sc, inp)
+    text = (Path(__file__).resolve().parents[2] / 'docs/own-data.md').read_text()
+    docs = yaml.safe_load(next(b for b in re.findall(r'```yaml\n(.*?)```', text, re.S) if 'ned_frd_321' in b))
+    files = (tmp_path / 'imu.csv', tmp_path / 'master.csv', tmp_path / 'ldv.csv')
+    a, b = recording.load(*files, layout_map=docs), recording.load(*files, layout_map=AEROSPACE_MAP)
+    for name in ('gyro', 'accel'):
+        assert np.array_equal(getattr(a.imu, name), getattr(b.imu, name))
+    for name in ('q_nb', 'v_b', 'w_b', 'lat', 'lon', 'h'):
+        assert np.array_equal(getattr(a.master, name), getattr(b.master, name))
+    # rows without a measurement (empty cells after the launch) are skipped and counted under one sigma
+    assert np.array_equal(a.ldv.t_ns, b.ldv.t_ns[b.ldv.valid]) and a.ldv.report.skipped == np.sum(~b.ldv.valid)
+    assert np.array_equal(a.ldv.v, b.ldv.v[b.ldv.valid]) and np.all(a.ldv.sigma == 0.01)
+    assert [r.warnings for r in a.reports()] == [[], [], []]
