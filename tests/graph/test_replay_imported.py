@@ -1,7 +1,9 @@
 """An imported log through the real replay path (scripts/import_log.sh, scripts/replay.sh: the
-filter node in its own process): a short simulated catapult run exported to the canonical CSV
-layout, without truth. The replay's estimates equal the batch run's to 1e-6 rad, and the
-summary gives the estimate and its 1-sigma without truth, and says so."""
+filter node in its own process): a short simulated catapult run written in the aerospace layout
+(NED/FRD Euler degrees, rates, g, times from 0; the canonical one is replayed in-process by
+tests/ros/test_importer.py), without truth. The replay's estimates equal the batch run's to
+1e-6 rad, the origin and the IMU rate come from the bag, and the summary gives the estimate and
+its 1-sigma without truth, and says so."""
 from __future__ import annotations
 
 import json
@@ -9,10 +11,11 @@ import subprocess
 from pathlib import Path
 
 import numpy as np
+import yaml
+from support.recorded_layouts import AEROSPACE_MAP, write_aerospace
 
 from alignment_core import pipeline
 from alignment_core.config import scenario as core_scenario
-from alignment_core.recorded import export
 from alignment_ros.graph import params_yaml
 from alignment_ros.summary import estimates_from_bag
 
@@ -25,13 +28,13 @@ def test_truth_free_replay_of_an_imported_log(tmp_path):
     sc = core_scenario.resolve(given)
     inp = pipeline.simulate(sc)
     batch = pipeline.align(sc, inp)
-    export.write_imu(tmp_path / 'imu.csv', inp.imu)
-    export.write_master(tmp_path / 'master.csv', inp.master, pipeline.plane_of(sc))
-    export.write_velocity(tmp_path / 'ldv.csv', inp.ldv, 'ldv')
+    write_aerospace(tmp_path, sc, inp)
+    (tmp_path / 'map.yaml').write_text(yaml.safe_dump(AEROSPACE_MAP))
     p = subprocess.run([str(ROOT / 'scripts/import_log.sh'), '--imu', str(tmp_path / 'imu.csv'),
                         '--master', str(tmp_path / 'master.csv'), '--ldv', str(tmp_path / 'ldv.csv'),
-                        '--out', str(tmp_path / 'bag')], capture_output=True, text=True, timeout=120)
-    assert p.returncode == 0, p.stdout + p.stderr
+                        '--map', str(tmp_path / 'map.yaml'), '--out', str(tmp_path / 'bag')],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0 and 'warning' not in p.stderr, p.stdout + p.stderr
     # the scenario's filter section (its tuning, lever arm, heading on deck), as a user would give it;
     # the origin and the IMU rate come from the bag
     filt = {k: v for k, v in given.items() if k in ('filter', 'aircraft')}
@@ -40,6 +43,7 @@ def test_truth_free_replay_of_an_imported_log(tmp_path):
                         '--params-file', str(tmp_path / 'params.yaml')], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "origin 40.000000000, 116.000000000 deg: the importer's (bag metadata)" in r.stderr
+    assert "IMU rate 100 Hz: the importer's (bag metadata)" in r.stderr
     assert 'no truth in the input: estimate and 1 sigma only' in r.stdout
     s = json.loads((tmp_path / 'replay' / 'summary.json').read_text())
     assert s['truth'] is False and s['complete'] is True and s['misalignment_truth_rad'] is None

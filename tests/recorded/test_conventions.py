@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from alignment_core.recorded import conventions as cv
-from alignment_core.recorded.units import LogError
+from alignment_core.recorded.column_units import LogError
 
 D = np.pi / 180.0
 E, N, U = np.eye(3)

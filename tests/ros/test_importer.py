@@ -10,30 +10,18 @@ import numpy as np
 import pytest
 import yaml
 from rclpy.serialization import deserialize_message
-from scipy.spatial.transform import Rotation
+from support.recorded_layouts import AEROSPACE_MAP, write_aerospace
 
 from alignment_core import pipeline
 from alignment_core.config import scenario as core_scenario
 from alignment_core.estimation.engine import TransferAlignment
-from alignment_core.geometry.rotations import quat_to_dcm
-from alignment_core.recorded import export
-from alignment_core.recorded import log as recorded
-from alignment_core.units import DEG, G0
+from alignment_core.recorded import export, recording
+from alignment_core.units import DEG
 from alignment_ros import convert, importer, topics
 from alignment_ros.bag import BagReader
 from alignment_ros.replay import replay_topics
 
 SETS = ['duration_s=14.0', 'aircraft.catapult.launch_time_s=8.0']
-FRD = np.diag([1.0, -1.0, -1.0])                       # v_FRD = FRD @ v_FLU
-NED = np.array([[0, 1.0, 0], [1.0, 0, 0], [0, 0, -1.0]])   # v_NED = NED @ v_ENU
-AEROSPACE_MAP = {
-    'imu': {'time': 'time', 'kind': 'rates', 'body_axes': 'FRD', 'gyro': ['p', 'q', 'r'], 'gyro_unit': 'deg/s',
-            'accel': ['fx', 'fy', 'fz'], 'accel_unit': 'g'},
-    'master': {'time': 'time', 'body_axes': 'FRD', 'nav_frame': 'NED', 'attitude': 'ned_frd_321',
-               'euler': ['roll', 'pitch', 'yaw'], 'euler_unit': 'deg', 'velocity': ['vn', 've', 'vd'],
-               'position': ['lat', 'lon', 'alt']},
-    'ldv': {'time': 'time', 'body_axes': 'FRD', 'velocity': ['u', 'v', 'w'], 'sigma': 'sd'},
-}
 
 
 @pytest.fixture(scope='module')
@@ -41,34 +29,6 @@ def run():
     sc = core_scenario.load('catapult', core_scenario.parse_overrides(SETS))
     inp = pipeline.simulate(sc)
     return sc, inp, pipeline.align(sc, inp)
-
-
-def _t(t_ns: int, t0_ns: int) -> str:
-    return export.seconds(t_ns - t0_ns)
-
-
-def _write(path, head: str, rows: list[list]) -> None:
-    path.write_text(head + '\n' + '\n'.join(','.join(x if isinstance(x, str) else repr(float(x)) for x in r)
-                                            for r in rows) + '\n')
-
-
-def write_aerospace(d, sc, inp) -> None:
-    """The second layout, written here from the samples (not by the importer's code)."""
-    plane = pipeline.plane_of(sc)
-    t0 = sc.t0_ns                                  # the first stamp: times from 0
-    _write(d / 'imu.csv', 'time,p,q,r,fx,fy,fz',
-           [[_t(s.t_ns, t0), *(FRD @ s.gyro / DEG), *(FRD @ s.accel / G0)] for s in inp.imu])
-    rows = []
-    for m in inp.master:
-        c_ned_frd = NED @ quat_to_dcm(m.q_nb) @ FRD.T
-        yaw, pitch, roll = Rotation.from_matrix(c_ned_frd).as_euler('ZYX', degrees=True)
-        lat, lon, h = plane.to_geodetic(m.p_w)
-        rows.append([_t(m.t_ns, t0), roll, pitch, yaw, *(NED @ quat_to_dcm(m.q_nb) @ m.v_b),
-                     np.degrees(lat), np.degrees(lon), h])
-    _write(d / 'master.csv', 'time,roll,pitch,yaw,vn,ve,vd,lat,lon,alt', rows)
-    _write(d / 'ldv.csv', 'time,u,v,w,sd',
-           [[_t(s.t_ns, t0), *(FRD @ s.v_s), s.sigma] if s.valid else [_t(s.t_ns, t0), '', '', '', '-1']
-            for s in inp.ldv])
 
 
 def write_canonical(d, sc, inp) -> None:
@@ -80,7 +40,7 @@ def write_canonical(d, sc, inp) -> None:
 def align_bag(bag, sc) -> TransferAlignment:
     """A fresh filter fed the bag's sensor messages in stamp order (as the filter node takes them)."""
     meta = BagReader(bag).metadata().custom_data
-    plane = recorded.plane_at((float(meta[importer.ORIGIN_LAT]) * DEG, float(meta[importer.ORIGIN_LON]) * DEG))
+    plane = recording.plane_at((float(meta[importer.ORIGIN_LAT]) * DEG, float(meta[importer.ORIGIN_LON]) * DEG))
     f = TransferAlignment(sc.filter, plane, float(meta[importer.IMU_RATE]))
     push = {topics.AIRCRAFT_IMU: (f.push_imu, convert.msg_to_imu),
             topics.MASTER_ODOM: (f.push_master, convert.msg_to_master),
@@ -155,3 +115,24 @@ def test_a_doppler_log_becomes_its_topic(run, tmp_path):
     assert [s.valid for s in d] == [True, False, True] and d[0].sigma == pytest.approx(0.05)
     assert list(d[2].v_b) == [0.1, 0.2, 0.3] and d[0].t_ns == 1_500_000_000
     assert topics.LDV_TWIST not in BagReader(tmp_path / 'bag').topics()
+
+
+def test_the_docs_aerospace_map_reads_the_aerospace_layout(run, tmp_path):
+    # the docs' example map (frames from the convention, one LDV sigma for every row) on the
+    # aerospace files: the same streams as the tests' map, the LDV sigma the scenario's 0.01 m/s
+    import re
+    from pathlib import Path
+    sc, inp, _ = run
+    write_aerospace(tmp_path, sc, inp)
+    text = (Path(__file__).resolve().parents[2] / 'docs/own-data.md').read_text()
+    docs = yaml.safe_load(next(b for b in re.findall(r'```yaml\n(.*?)```', text, re.S) if 'ned_frd_321' in b))
+    files = (tmp_path / 'imu.csv', tmp_path / 'master.csv', tmp_path / 'ldv.csv')
+    a, b = recording.load(*files, layout_map=docs), recording.load(*files, layout_map=AEROSPACE_MAP)
+    for name in ('gyro', 'accel'):
+        assert np.array_equal(getattr(a.imu, name), getattr(b.imu, name))
+    for name in ('q_nb', 'v_b', 'w_b', 'lat', 'lon', 'h'):
+        assert np.array_equal(getattr(a.master, name), getattr(b.master, name))
+    # rows without a measurement (empty cells after the launch) are skipped and counted under one sigma
+    assert np.array_equal(a.ldv.t_ns, b.ldv.t_ns[b.ldv.valid]) and a.ldv.report.skipped == np.sum(~b.ldv.valid)
+    assert np.array_equal(a.ldv.v, b.ldv.v[b.ldv.valid]) and np.all(a.ldv.sigma == 0.01)
+    assert [r.warnings for r in a.reports()] == [[], [], []]

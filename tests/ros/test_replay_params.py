@@ -56,11 +56,21 @@ def test_set_wins_and_a_different_origin_is_said(imported):
                      "the filter is given -33.0, 151.0"]
 
 
-def test_a_params_file_defines_what_it_gives(imported, tmp_path):
+def test_a_params_file_gives_the_filter_but_may_not_contradict_the_import(imported, tmp_path):
     p = tmp_path / 'p.yaml'
+    p.write_text('/**:\n  ros__parameters:\n    filter.model: vm15\n')
+    given, notes = replay_parameters(imported, p, [])
+    assert given == {'filter.model': 'vm15', 'ship.lat_deg': -33.5, 'ship.lon_deg': 151.25, 'rate_hz': 200.0}
+    assert len(notes) == 2
+    p.write_text('/**:\n  ros__parameters:\n    rate_hz: 200.0\n    ship.lat_deg: -33.5\n    ship.lon_deg: 151.25\n')
+    assert replay_parameters(imported, p, [])[0]['rate_hz'] == 200.0            # agreeing: taken
     p.write_text('/**:\n  ros__parameters:\n    rate_hz: 50.0\n    filter.model: vm15\n')
-    given, _ = replay_parameters(imported, p, [])
-    assert given['rate_hz'] == 50.0 and given['ship.lat_deg'] == -33.5 and given['filter.model'] == 'vm15'
+    with pytest.raises(ValueError, match=r'gives rate_hz 50.0 but the imported IMU log runs at 200 Hz'):
+        replay_parameters(imported, p, [])
+    assert replay_parameters(imported, p, ['rate_hz=50.0'])[0]['rate_hz'] == 50.0   # --set: knowingly
+    p.write_text('/**:\n  ros__parameters:\n    ship.lat_deg: 40.0\n    ship.lon_deg: 116.0\n')
+    with pytest.raises(ValueError, match=r"gives ship.lat_deg 40.0 but the imported bag's positions are relative"):
+        replay_parameters(imported, p, [])
 
 
 def test_without_metadata_or_params_the_data_gives_them(recorded_elsewhere):
@@ -75,3 +85,13 @@ def test_bad_values_are_refused(imported):
         replay_parameters(imported, None, ['filter.model=nonesuch'])
     with pytest.raises(ConfigError, match='--set expects KEY=VALUE'):
         replay_parameters(imported, None, ['rate_hz'])
+
+
+def test_replay_exits_2_on_a_params_file_contradicting_the_import(imported, tmp_path, capsys):
+    from alignment_ros import replay
+    p = tmp_path / 'p.yaml'
+    p.write_text('/**:\n  ros__parameters:\n    rate_hz: 100.0\n')
+    assert replay.main([str(imported), '--params-file', str(p), '--out', str(tmp_path / 'out')]) == 2
+    err = capsys.readouterr().err
+    assert 'replay:' in err and 'gives rate_hz 100.0 but the imported IMU log runs at 200 Hz' in err
+    assert not (tmp_path / 'out' / 'bag').exists()

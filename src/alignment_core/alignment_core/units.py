@@ -17,3 +17,4 @@ DPH = DEG / 3600.0                  # degree per hour, in rad/s
 G0 = 9.80665                        # standard gravity, m/s^2
 UG = 1e-6 * G0                      # micro-g, in m/s^2
 KNOT = 0.514444                     # knot, in m/s (1852 m / 3600 s, to six digits)
+FT = 0.3048                         # international foot, in m (exact by definition)

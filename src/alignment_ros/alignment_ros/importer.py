@@ -23,9 +23,8 @@ import yaml
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 
-from alignment_core.recorded import derive
-from alignment_core.recorded import log as recorded
-from alignment_core.recorded.units import LogError
+from alignment_core.recorded import derive, recording
+from alignment_core.recorded.column_units import LogError
 from alignment_core.units import DEG
 
 from . import convert, topics
@@ -54,9 +53,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     return ap.parse_args(argv)
 
 
-def _origin(text: str | None, log: recorded.RecordedLog) -> tuple[float, float]:
+def _origin(text: str | None, log: recording.RecordedLog) -> tuple[float, float]:
     if text is None:
-        return recorded.origin_of(log)
+        return recording.origin_of(log)
     try:
         lat, lon = (float(x) for x in text.split(','))
     except ValueError:
@@ -66,10 +65,10 @@ def _origin(text: str | None, log: recorded.RecordedLog) -> tuple[float, float]:
     return lat * DEG, lon * DEG
 
 
-def write_bag(log: recorded.RecordedLog, origin: tuple[float, float], out: Path,
+def write_bag(log: recording.RecordedLog, origin: tuple[float, float], out: Path,
               sources: dict[str, str]) -> dict[str, int]:
     """Write the bag; return the message count per topic."""
-    plane = recorded.plane_at(origin)
+    plane = recording.plane_at(origin)
     custom = {ORIGIN_LAT: repr(math.degrees(origin[0])), ORIGIN_LON: repr(math.degrees(origin[1])),
               TIME_OFFSET: str(log.time_offset_ns), IMU_RATE: repr(derive.rate_hz_of(log.imu.t_ns)),
               META + 'master_body_rate': 'derived from attitude differences' if log.master.rate_derived
@@ -82,23 +81,23 @@ def write_bag(log: recorded.RecordedLog, origin: tuple[float, float], out: Path,
     with BagWriter(out, custom_data=custom) as w:
         for t in (topics.CLOCK, topics.MASTER_ODOM, topics.MASTER_FIX, topics.AIRCRAFT_IMU):
             w.add_topic(t, topics.TOPIC_TYPES[t])
-        for t_ns in recorded.stamps_ns(log):
+        for t_ns in recording.stamps_ns(log):
             w.write(topics.CLOCK, serialize_message(Clock(clock=convert.stamp(int(t_ns)))), int(t_ns))
-        for s in recorded.master_samples(log, plane):
+        for s in recording.master_samples(log, plane):
             w.write(topics.MASTER_ODOM, serialize_message(convert.master_to_msg(s)), s.t_ns)
         m = log.master
         for k, t_ns in enumerate(m.t_ns):
             fix = convert.navsatfix(int(t_ns), topics.FRAME_SHIP, m.lat[k], m.lon[k], m.h[k])
             w.write(topics.MASTER_FIX, serialize_message(fix), int(t_ns))
-        for s in recorded.imu_samples(log):       # covariances 0: unknown (REP-145)
+        for s in recording.imu_samples(log):       # covariances 0: unknown (REP-145)
             w.write(topics.AIRCRAFT_IMU, serialize_message(convert.imu_to_msg(s, 0.0, 0.0)), s.t_ns)
         if log.ldv is not None:
             w.add_topic(topics.LDV_TWIST, topics.TOPIC_TYPES[topics.LDV_TWIST])
-            for s in recorded.ldv_samples(log.ldv):
+            for s in recording.ldv_samples(log.ldv):
                 w.write(topics.LDV_TWIST, serialize_message(convert.ldv_to_msg(s)), s.t_ns)
         if log.doppler is not None:
             w.add_topic(topics.DOPPLER_TWIST, topics.TOPIC_TYPES[topics.DOPPLER_TWIST])
-            for d in recorded.doppler_samples(log.doppler):
+            for d in recording.doppler_samples(log.doppler):
                 w.write(topics.DOPPLER_TWIST, serialize_message(convert.doppler_to_msg(d)), d.t_ns)
         counts = dict(w.counts)
     return counts
@@ -114,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
             doc = yaml.safe_load(a.map.read_text())
             if doc is not None and not isinstance(doc, dict):
                 raise LogError(f'{a.map}: expected a mapping of sections (imu, master, ldv, doppler)')
-        log = recorded.load(a.imu, a.master, a.ldv, a.doppler, doc)
+        log = recording.load(a.imu, a.master, a.ldv, a.doppler, doc)
         origin = _origin(a.origin, log)
         if a.out.exists():
             raise LogError(f'{a.out} already exists; choose another --out')

@@ -5,7 +5,9 @@ The world origin (ship.lat_deg, ship.lon_deg) and the IMU rate (rate_hz) are tak
 order, from: --set; the params file's own entries; the importer's record in the bag's
 metadata (the origin its positions are relative to, the IMU's median stamp spacing); the
 params file's scenario defaults (a params file of a run of the graph defines its whole
-scenario); the data (the first /master/fix, the /aircraft/imu stamp spacing).
+scenario); the data (the first /master/fix, the /aircraft/imu stamp spacing). For an imported
+bag a params file's rate or origin that contradicts the importer's is refused (only --set
+overrides those).
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ from .topics import msg_class
 FILTER = 'alignment_filter_node'
 ORIGIN_KEYS = ('ship.lat_deg', 'ship.lon_deg')
 ORIGIN_AGREES_DEG = 1e-9
+RATE_AGREES = 1e-9           # relative
 
 
 def _first_fix(reader: BagReader) -> tuple[float, float] | None:
@@ -45,6 +48,25 @@ def _imu_rate(reader: BagReader) -> float:
     return rate_hz_of(t)
 
 
+def _check_file_against_import(meta: dict[str, str], file_given: dict[str, Any], overrides: dict[str, Any],
+                               params_file: Path | None) -> None:
+    """ValueError when the params file gives an IMU rate or an origin that contradicts the
+    importer's (the rate drives gap detection, bridging, filtering and noise discretisation; the
+    bag's positions are relative to that origin); --set may still override them knowingly."""
+    rate = float(meta[importer.IMU_RATE])
+    if 'rate_hz' in file_given and 'rate_hz' not in overrides and \
+            abs(float(file_given['rate_hz']) - rate) > RATE_AGREES * rate:
+        raise ValueError(f'{params_file} gives rate_hz {file_given["rate_hz"]} but the imported IMU log runs at '
+                         f'{rate:.6g} Hz ({importer.IMU_RATE} in the bag metadata): remove rate_hz from the '
+                         f'params file, or --set rate_hz=... to override')
+    origin = (float(meta[importer.ORIGIN_LAT]), float(meta[importer.ORIGIN_LON]))
+    for key, value in zip(ORIGIN_KEYS, origin):
+        if key in file_given and key not in overrides and abs(float(file_given[key]) - value) > ORIGIN_AGREES_DEG:
+            raise ValueError(f'{params_file} gives {key} {file_given[key]} but the imported bag\'s positions are '
+                             f'relative to the origin {origin[0]:.9f}, {origin[1]:.9f} deg (bag metadata): remove '
+                             f'{", ".join(ORIGIN_KEYS)} from the params file, or --set them to override')
+
+
 def replay_parameters(bag: Path, params_file: Path | None, sets: list[str]
                       ) -> tuple[dict[str, Any], list[str]]:
     """(the filter's parameters, flat; one line per value taken from the data). ConfigError
@@ -56,6 +78,8 @@ def replay_parameters(bag: Path, params_file: Path | None, sets: list[str]
     meta = reader.metadata().custom_data or {}
     notes: list[str] = []
     imported = importer.ORIGIN_LAT in meta
+    if imported:
+        _check_file_against_import(meta, file_given, overrides, params_file)
     if imported and all(k in given for k in ORIGIN_KEYS):
         lat, lon = float(meta[importer.ORIGIN_LAT]), float(meta[importer.ORIGIN_LON])
         if max(abs(given['ship.lat_deg'] - lat), abs(given['ship.lon_deg'] - lon)) > ORIGIN_AGREES_DEG:

@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 
 from alignment_core.geometry.euler import euler_to_dcm, rfu_to_flu
 
-from .units import LogError
+from .column_units import LogError
 
 BODY_TO_FLU: dict[str, np.ndarray] = {
     'FLU': np.eye(3),

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .units import TIME_NS, LogError
+from .column_units import TIME_NS, LogError
 
 ColumnRef = str | int
 """A column by its header name (or .mat variable name) or its 0-based index."""

@@ -18,11 +18,14 @@ import numpy as np
 from alignment_core.geometry import earth
 from alignment_core.samples import DopplerSample, ImuSample, LdvSample, MasterSample
 
+from .column_units import LogError
 from .layout import read_map
 from .streams import ImuLog, MasterLog, StreamReport, VelocityLog, read_imu, read_master, read_velocity
-from .units import LogError
 
 START_NS = 1_000_000_000     # where times from 0 start (the scenarios' start_time_s)
+MIN_MASTER_RATE_RADPS = 5e-3     # a master moving this much (rms) tells the slave's rate unit
+RATE_RATIO = 10.0                # slave / master rms rate beyond this factor: warned
+DEG_PER_RAD = 180.0 / np.pi
 
 
 @dataclass
@@ -48,6 +51,7 @@ def load(imu: Path, master: Path, ldv: Path | None = None, doppler: Path | None 
         'doppler': read_velocity('doppler', Path(doppler), lay['doppler']) if doppler is not None else None,
     }
     given = [s for s in streams.values() if s is not None]
+    _compare_rates(streams['imu'], streams['master'])
     _check_overlap({k: s for k, s in streams.items() if s is not None})
     if offset == 'auto':
         first = min(int(s.t_ns[0]) for s in given)
@@ -72,6 +76,21 @@ def _check_overlap(streams: dict[str, Any]) -> None:
             raise LogError(f'{k} times {a * 1e-9:.9g} .. {b * 1e-9:.9g} s and master times '
                            f'{ref[0] * 1e-9:.9g} .. {ref[1] * 1e-9:.9g} s do not overlap: different time '
                            f'bases or units?')
+
+
+def _compare_rates(imu: ImuLog, master: MasterLog) -> None:
+    """Warn when the slave's rates are far from the master's (a moving master: deg/s given as
+    rad/s shows as about 57.3 times, rad/s as deg/s as 1/57.3)."""
+    w_master = float(np.sqrt(np.mean(np.sum(master.w_b**2, axis=1))))
+    if w_master < MIN_MASTER_RATE_RADPS:
+        return
+    ratio = float(np.sqrt(np.mean(np.sum(imu.gyro**2, axis=1)))) / w_master
+    if not 1 / RATE_RATIO <= ratio <= RATE_RATIO:
+        log_ratio = np.log(ratio) if ratio > 0.0 else -np.inf
+        hint = ('deg/s given as rad/s?' if abs(log_ratio - np.log(DEG_PER_RAD)) < np.log(2.0) else
+                'rad/s given as deg/s?' if abs(log_ratio + np.log(DEG_PER_RAD)) < np.log(2.0) else
+                'are the units right?')
+        imu.report.warnings.append(f'gyro: rms rate {ratio:.4g} times the master\'s ({w_master:.3g} rad/s): {hint}')
 
 
 def origin_of(log: RecordedLog) -> tuple[float, float]:

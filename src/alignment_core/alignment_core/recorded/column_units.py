@@ -1,14 +1,13 @@
 """Units a log's columns may be given in: name -> (quantity, factor to SI)."""
 from __future__ import annotations
 
-from alignment_core.units import ARCMIN, ARCSEC, DEG, DPH, G0, KNOT, UG
+from alignment_core.units import ARCMIN, ARCSEC, DEG, DPH, FT, G0, KNOT, UG
 
 
 class LogError(ValueError):
     """A log cannot be read as its layout says (the message names the file, column or rows)."""
 
 
-FT = 0.3048
 UNITS: dict[str, tuple[str, float]] = {
     'rad': ('angle', 1.0), 'mrad': ('angle', 1e-3), 'deg': ('angle', DEG),
     'arcmin': ('angle', ARCMIN), 'arcsec': ('angle', ARCSEC),
