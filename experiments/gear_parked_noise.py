@@ -46,9 +46,9 @@ def relative_motion(sea_state: int, wave_heading_deg: float, gust: str, seed: in
     ships = ShipBatch.of(pipeline.ship_samples(sc))
     kin = pipeline.SlaveImuStage(sc).kin
     kin.truth_batch(ships, (ships.t_ns - sc.t0_ns) / 1e9)        # simulates the gear on the way
-    k = np.arange(int(SKIP_S * sc.rate_hz), kin.gear.n)
-    v = np.einsum('ij,kj->ki', kin.c_ds, kin.gear.imu_at(k)[1])
-    return v, kin.gear.rotation_at(k)[0], sc.rate_hz
+    k = np.arange(int(SKIP_S * sc.rate_hz), kin.gear.response.n)
+    v = np.einsum('ij,kj->ki', kin.gear.c_ds, kin.gear.response.imu_at(k)[1])
+    return v, kin.gear.response.rotation_at(k)[0], sc.rate_hz
 
 
 def summary(vs: list[np.ndarray], ths: list[np.ndarray], rate: float) -> dict[str, np.ndarray | float]:

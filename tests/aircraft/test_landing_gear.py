@@ -226,7 +226,7 @@ def test_gear_stepping_equals_batch_and_increments_integrate_to_truth():
     ships = pipeline.ship_samples(sc)
     stage = pipeline.SlaveImuStage(sc)
     truth, imu = stage.run_batch(ShipBatch.of(ships))
-    assert stage.kin.gear.n == int(6.0 * sc.rate_hz) + 1     # simulated up to the release
+    assert stage.kin.gear.response.n == int(6.0 * sc.rate_hz) + 1     # simulated up to the release
     step = pipeline.SlaveImuStage(sc)
     out = [step.step(s) for s in ships]
     assert np.array_equal([o[0].q_nb for o in out], truth['q_nb'])
@@ -252,7 +252,7 @@ def test_truth_and_ldv_see_the_gear():
     parked = [s for s in inp.ldv if s.valid and s.t_ns < sc.t0_ns + 1.9e9]
     assert len(parked) > 100
     k = np.array([(s.t_ns - sc.t0_ns) // sc.dt_ns for s in parked])
-    expected = kin.gear.imu_at(k)[1] @ kin.c_ds.T
+    expected = kin.gear.response.imu_at(k)[1] @ kin.gear.c_ds.T
     got = np.array([s.v_s for s in parked])
     assert np.sqrt((expected**2).mean()) > 1e-4               # mm/s of motion
     np.testing.assert_allclose(got, expected, atol=1e-7)

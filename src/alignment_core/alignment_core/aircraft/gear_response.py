@@ -2,7 +2,7 @@
 over the deck and the hold-back tension (the linear model of aircraft/landing_gear.py).
 
 Loads at sample k: the deck's motion (specific force at the CG of the rigidly mounted airframe
-and the deck's angular acceleration, airframe axes, from aircraft/kinematics.py), Dryden gusts
+and the deck's angular acceleration, airframe axes, from aircraft/gear_on_deck.py), Dryden gusts
 of the wind over the deck, and the hold-back pull (ramped in by a smoothstep over the catapult's
 tensioning, dropped to zero at the launch sample). The state starts in the quasi-static
 equilibrium of the first sample's load (no start transient) and steps exactly between samples

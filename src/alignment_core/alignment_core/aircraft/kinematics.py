@@ -29,7 +29,7 @@ Optional effects (all off by default, leaving the default output bit-identical):
   + J_r(theta) theta'; the aircraft truth attitude carries it (the true relative attitude),
   while the reported misalignment stays the mounting mu. The catapult track stays the
   mounted aircraft x axis C_a^s(mu) e_x (the deck rail does not follow the flexure).
-- aircraft.gear (landing_gear.py, gear_response.py): the airframe on its landing gear, driven by
+- aircraft.gear (landing_gear.py, gear_response.py, gear_on_deck.py): the airframe on its landing gear, driven by
   the deck's motion at the rigidly mounted CG, gusts and the hold-back pull; the IMU point moves
   by C_d^s d_imu(t) (C_d^s: the heading on deck) and the airframe turns by theta_g (airframe
   axes), which enters as a relative rotation exp(-mu) theta_g added to the flexure's theta
@@ -50,7 +50,7 @@ from alignment_core.aircraft.deck_flexure import FlexureConfig, FlexureProcess
 from alignment_core.aircraft.flight import FlightPath, airborne_start
 from alignment_core.aircraft.flight_config import FlightConfig
 from alignment_core.aircraft.gear_config import GearConfig
-from alignment_core.aircraft.gear_response import GearResponse
+from alignment_core.aircraft.gear_on_deck import GearOnDeck
 from alignment_core.aircraft.vibration import Vibration, VibrationConfig
 from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import (
@@ -141,42 +141,21 @@ class AircraftKinematics:
         self.vib = Vibration(vib, self.launch) if (vib.enabled and cat.enabled) else None
         self.vib_motion = self.vib is not None and vib.mode == 'motion'
         self.flex = FlexureProcess(cfg.flexure, seed, rate_hz) if cfg.flexure.enabled else None
-        self.gear = self._make_gear(cfg, seed, rate_hz) if cfg.gear.enabled else None
+        self.gear: GearOnDeck | None = None
+        if cfg.gear.enabled:
+            holdback = None
+            if cat.enabled and cat.holdback_s > 0.0:
+                holdback = (self.catapult.holdback_start, self.launch)
+            self.gear = GearOnDeck(cfg.gear, cfg.heading_on_deck_deg, self.mu, self.r0, plane, seed, rate_hz,
+                                   holdback, self._imu)
         self.has_rot = self.flex is not None or self.gear is not None
-
-    def _make_gear(self, cfg: AircraftConfig, seed: int, rate_hz: float) -> GearResponse:
-        """The gear's response; its frame is the deck turned by the heading on deck (C_d^s)."""
-        psi = -cfg.heading_on_deck_deg * DEG
-        self.c_ds = np.array([[np.cos(psi), -np.sin(psi), 0.0], [np.sin(psi), np.cos(psi), 0.0], [0.0, 0.0, 1.0]])
-        self.c_mu = rotvec_to_dcm_batch(self.mu)                         # airframe -> IMU axes: C_mu^T
-        self.r_cg = self.r0 - self.c_ds @ np.asarray(cfg.gear.imu_from_cg_m, dtype=float)
-        lat0 = self.plane.to_geodetic(np.zeros(3))[0]
-        f0 = np.array([0.0, 0.0, float(earth.gravity(lat0, self.r_cg[2]))])
-        holdback = None
-        if self.enabled and cfg.catapult.holdback_s > 0.0:
-            holdback = (self.catapult.holdback_start, self.launch)
-        return GearResponse(cfg.gear, seed, rate_hz, f0, holdback)
-
-    def _gear_feed(self, sb: ShipBatch, tau: np.ndarray) -> None:
-        """Simulate the gear through these deck samples: the specific force at the rigidly mounted
-        CG and the deck's angular acceleration, in the gear's axes."""
-        c_nb = quat_to_dcm_batch(sb.q_nb)
-        wxr = cross(sb.w_b, self.r_cg)
-        v_p = np.einsum('kij,kj->ki', c_nb, sb.v_b + wxr)
-        a_p = np.einsum('kij,kj->ki', c_nb, sb.a_b + cross(sb.wdot_b, self.r_cg) + cross(sb.w_b, wxr))
-        p_p = sb.p_w + np.einsum('kij,kj->ki', self.plane.c_local_to_world(sb.p_w),
-                                       np.einsum('kij,j->ki', c_nb, self.r_cg))
-        _, f_s = self._imu(c_nb, sb.w_b, v_p, a_p, p_p)                  # ship axes
-        self.gear.feed(self.gear.index(tau), np.einsum('ji,kj->ki', self.c_ds, f_s),
-                       np.einsum('ji,kj->ki', self.c_ds, sb.wdot_b))
 
     def _flex_at(self, tau):
         """(theta, theta') of the relative rotation (flexure and gear, aircraft axes) at the sample
         instants tau, or None without either."""
         if self.gear is None:
             return None if self.flex is None else self.flex.at(self.flex.index(tau))
-        th, thd = self.gear.rotation_at(self.gear.index(tau))
-        th, thd = (np.einsum('ji,...j->...i', self.c_mu, x) for x in (th, thd))    # C_mu^T theta_g
+        th, thd = self.gear.rotation(tau)
         if self.flex is None:
             return th, thd
         tf, tfd = self.flex.at(self.flex.index(tau))
@@ -199,7 +178,7 @@ class AircraftKinematics:
             r = self.r0 + s[..., None] * self.track
             rd, rdd = sd[..., None] * self.track, sdd[..., None] * self.track
         if self.gear is not None:
-            d, v, a = (np.einsum('ij,...j->...i', self.c_ds, x) for x in self.gear.imu_motion(tau))
+            d, v, a = self.gear.displacement(tau)
             r, rd, rdd = r + d, rd + v, rdd + a
         if not self.vib_motion:
             return r, rd, rdd
@@ -260,7 +239,7 @@ class AircraftKinematics:
         c_nb = quat_to_dcm_batch(sb.q_nb)
         on = tau <= self.release
         if self.gear is not None and np.any(on):
-            self._gear_feed(sb.slice(on), tau[on])
+            self.gear.feed(sb.slice(on), tau[on])
         c_na = np.empty((len(tau), 3, 3))
         w_na = np.zeros((len(tau), 3))
         v_p = np.empty((len(tau), 3))
@@ -354,8 +333,8 @@ class AircraftKinematics:
             p_w = (1.0 - uu) * a.p_w[:, None] + uu * b.p_w[:, None]
             flex = None
             if self.gear is not None:
-                self._gear_feed(a, tau0[deck])
-                self._gear_feed(b, tau0[deck] + h[deck])
+                self.gear.feed(a, tau0[deck])
+                self.gear.feed(b, tau0[deck] + h[deck])
             if self.has_rot:
                 (t0, d0), (t1, d1) = self._flex_at(tau0[deck]), self._flex_at(tau0[deck] + h[deck])
                 flex = (herm(t0, d0, t1, d1, h00, h10, h01, h11),
