@@ -172,6 +172,9 @@ def test_holdback_ramp_reaches_the_static_kneel_then_rings_down():
     n = int(20 * rate) + 1
     resp.feed(np.arange(n), np.tile([0.0, 0.0, G0], (n, 1)), np.zeros((n, 3)))
     q, _, _ = resp.states(np.arange(n))
+    t = resp.holdback_tension(np.array([0.99, 6.0, 10.99, 11.0]))
+    assert t[0] == 0.0 and t[1] == pytest.approx(0.5 * CFG.holdback_tension_n) and t[2] > 0.99 * t[1] * 2
+    assert t[3] == 0.0                                        # released at the launch sample
     expected = resp.model.static(CFG.holdback_tension_n * resp.model.holdback_load())
     k_end = int(11.0 * rate) - 1
     np.testing.assert_allclose(q[k_end, [0, 2, 4]], expected[[0, 2, 4]], rtol=0.02)

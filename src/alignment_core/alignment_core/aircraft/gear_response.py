@@ -85,6 +85,7 @@ class GearResponse:
         self.model = GearModel(cfg)
         self.rate_hz = rate_hz
         self.dt = 1.0 / rate_hz
+        self.dt_ns = int(round(1e9 / rate_hz))              # sample k is at tau = k dt_ns / 1e9, as stamps give it
         self.f0 = np.asarray(f0, dtype=float)
         self.phi, self.g0, self.g1 = self.model.discretise(self.dt)
         self.gust = DeckGust(cfg, seed, self.dt)
@@ -127,7 +128,7 @@ class GearResponse:
             raise ValueError(f"gear samples must be fed in order without gaps: expected {self._n}, got {k[0]}")
         load = self.model.inertial_load(specific_force[new], wdot[new], self.f0)
         if self.holdback is not None:
-            load = load + self.holdback_tension(k * self.dt)[:, None] * self.holdback_b
+            load = load + self.holdback_tension(k * self.dt_ns / 1e9)[:, None] * self.holdback_b
         noise = self.gust.draw(len(k)) if self.gust.on else None
         self._grow(self._n + len(k))
         for j in range(len(k)):
