@@ -184,6 +184,32 @@ def test_holdback_ramp_reaches_the_static_kneel_then_rings_down():
     assert np.abs(q[int(11.5 * rate):]).max() < 1.5 * np.abs(expected).max()
 
 
+def test_a_heeled_deck_leans_the_aircraft_by_the_closed_form():
+    # a deck heeled by phi tilts the specific force: the airframe is pushed sideways by m g sin(phi)
+    # at its CG, the lateral tyres hold it at the deck, and the moment h m g sin(phi) about the CG
+    # is balanced by the main legs (k: strut and tyre in series) less gravity's m g h:
+    # theta_x = h m g sin(phi) / (sum k_i y_i^2 - m g h)
+    phi = 0.01
+    f = np.array([0.0, G0 * np.sin(phi), G0 * np.cos(phi)])
+    resp = GearResponse(dataclasses.replace(CFG, gust_severity='none'), 1, 100.0, np.array([0.0, 0.0, G0]))
+    resp.feed(np.arange(3), np.tile(f, (3, 1)), np.zeros((3, 3)))
+    q = resp.states(np.arange(3))[0]
+    loads = leg_loads(CFG)
+    ks = CFG.polytropic_index * loads[1] / CFG.main_gas_length_m
+    k = ks * CFG.main_tyre_kz_npm / (ks + CFG.main_tyre_kz_npm)
+    m, h = CFG.mass_kg, CFG.cg_height_m
+    lean = h * m * G0 * np.sin(phi) / (2 * k * (0.5 * CFG.main_track_m) ** 2 - m * G0 * h)
+    np.testing.assert_allclose(q[:, 3], lean, rtol=1e-6)          # settled from the first sample on
+    assert lean > 0                                                # towards the low side (-y)
+    # the lateral tyres carry the whole side force: their stiffness-weighted mean slide is F / sum k_y
+    # (the slides differ by a yaw: the nose and main tyres' stiffness is not balanced about the CG)
+    ky = np.array([CFG.nose_tyre_ky_npm, CFG.main_tyre_ky_npm, CFG.main_tyre_ky_npm])
+    x = np.array([(1 - CFG.nose_load_fraction) * CFG.wheelbase_m, -CFG.nose_load_fraction * CFG.wheelbase_m,
+                  -CFG.nose_load_fraction * CFG.wheelbase_m])
+    slide = q[:, 1:2] + q[:, 5:6] * x + h * q[:, 3:4]               # u_iy = d_y + theta_z x_i + h theta_x
+    np.testing.assert_allclose(slide @ ky / ky.sum(), -m * G0 * np.sin(phi) / ky.sum(), rtol=1e-6)
+
+
 def test_gust_intensities_are_drydens():
     cfg = dataclasses.replace(CFG, wind_over_deck_mps=15.0, gust_severity='moderate')
     gust = DeckGust(cfg, seed=3, dt=0.5)
