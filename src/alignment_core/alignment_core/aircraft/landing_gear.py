@@ -139,7 +139,7 @@ class GearModel:
         alpha = w / V, beta = v / V, the dynamic pressure rises by rho V u."""
         c = self.cfg
         rho, v, s, b, cb = c.air_density_kgpm3, c.wind_over_deck_mps, c.wing_area_m2, c.wing_span_m, c.mean_chord_m
-        qv = 0.5 * rho * v * s                                   # d(q S)/d(angle) / V ... per m/s of gust
+        qv = 0.5 * rho * v * s                                   # q S / V: per m/s of gust, per unit slope
         out = np.zeros((N_DOF, 3))
         out[0, 0] = -rho * v * s * c.drag_coefficient           # drag grows with the headwind
         out[2, 0] = rho * v * s * c.lift_coefficient
