@@ -26,6 +26,7 @@ from alignment_core.samples import ShipBatch
 from alignment_core.units import G0
 
 CFG = GearConfig(enabled=True)
+LINEAR = dataclasses.replace(CFG, strut_spring='linear')     # the tangent model, for the linear closed forms
 
 
 def leg_loads(cfg: GearConfig) -> np.ndarray:
@@ -117,12 +118,12 @@ def test_energy_balance_with_and_without_damping():
     rng = np.random.default_rng(5)
     x0 = np.concatenate([rng.normal(0, 0.01, N_DOF), rng.normal(0, 0.05, N_DOF)])
     dt, n = 2e-4, 15000
-    undamped = GearModel(dataclasses.replace(CFG, strut_damping_ratio=0.0, tyre_damping_ratio=0.0))
+    undamped = GearModel(dataclasses.replace(LINEAR, strut_damping_ratio=0.0, tyre_damping_ratio=0.0))
     q, qd = _simulate(undamped, x0, np.zeros(N_DOF), dt, n)
     e = undamped.energy(q, qd)
     assert np.ptp(e) < 1e-9 * e[0]
     # damped, under a constant load switched on at t = 0: the load's work = energy gained + dissipated
-    model = GearModel(CFG)
+    model = GearModel(LINEAR)
     load = 5e4 * model.holdback_load() + rng.normal(0, 1e3, N_DOF)
     q, qd = _simulate(model, x0, load, dt, n)
     e = model.energy(q, qd)
@@ -135,15 +136,15 @@ def test_energy_balance_with_and_without_damping():
 def test_holdback_offset_and_kneel_statics():
     tension = 1e5
     # pulled at the deck level with the CG on it: no moment, the airframe moves T / sum(k_x)
-    flat = dataclasses.replace(CFG, cg_height_m=0.0, holdback_height_m=0.0)
+    flat = dataclasses.replace(LINEAR, cg_height_m=0.0, holdback_height_m=0.0)
     q = GearModel(flat).static(tension * GearModel(flat).holdback_load())
     kx = CFG.nose_tyre_kx_npm + 2 * CFG.main_tyre_kx_npm
     assert q[0] == pytest.approx(tension / kx, rel=1e-9)
     assert abs(q[4]) < 1e-12 and abs(q[2]) < 1e-12
     # the default: pulled at holdback_height_m, the nose kneels. Statics by hand: the contact points
     # all move u_x = T / sum(k_x); moments about the CG: T z_hb + sum(x_i k_i u_iz) + m g h theta = 0
-    # with u_iz = d_z - theta x_i and sum(k_i u_iz) = 0 (k_i: strut and tyre in series)
-    model = GearModel(CFG)
+    # with u_iz = d_z - theta x_i and sum(k_i u_iz) = 0 (k_i: strut and tyre in series, linear springs)
+    model = GearModel(LINEAR)
     q = model.static(tension * model.holdback_load())
     f = leg_loads(CFG)
     gas = np.array([CFG.nose_gas_length_m, CFG.main_gas_length_m, CFG.main_gas_length_m])
@@ -191,7 +192,7 @@ def test_a_heeled_deck_leans_the_aircraft_by_the_closed_form():
     # theta_x = h m g sin(phi) / (sum k_i y_i^2 - m g h)
     phi = 0.01
     f = np.array([0.0, G0 * np.sin(phi), G0 * np.cos(phi)])
-    resp = GearResponse(dataclasses.replace(CFG, gust_severity='none'), 1, 100.0, np.array([0.0, 0.0, G0]))
+    resp = GearResponse(dataclasses.replace(LINEAR, gust_severity='none'), 1, 100.0, np.array([0.0, 0.0, G0]))
     resp.feed(np.arange(3), np.tile(f, (3, 1)), np.zeros((3, 3)))
     q = resp.states(np.arange(3))[0]
     loads = leg_loads(CFG)
@@ -208,6 +209,43 @@ def test_a_heeled_deck_leans_the_aircraft_by_the_closed_form():
                   -CFG.nose_load_fraction * CFG.wheelbase_m])
     slide = q[:, 1:2] + q[:, 5:6] * x + h * q[:, 3:4]               # u_iy = d_y + theta_z x_i + h theta_x
     np.testing.assert_allclose(slide @ ky / ky.sum(), -m * G0 * np.sin(phi) / ky.sum(), rtol=1e-6)
+
+
+def test_polytropic_struts_follow_the_gas_law():
+    # a weight increase dW on rigid tyres, CG on the contact plane, equal gas columns: every strut
+    # carries its lever-rule share times (1 + dW / W) and, by the polytropic law
+    # F = F0 (L / (L - s))^n, shortens by s = L (1 - (W / (W + dW))^(1/n)); the linear spring: L/n dW/W
+    cfg = dataclasses.replace(CFG, strut_spring='polytropic', cg_height_m=0.0, nose_gas_length_m=0.2,
+                              main_gas_length_m=0.2, nose_tyre_kz_npm=1e12, main_tyre_kz_npm=1e12)
+    model = GearModel(cfg)
+    w, dw = cfg.mass_kg * G0, 0.6 * cfg.mass_kg * G0
+    load = np.zeros(N_DOF)
+    load[2] = -dw
+    s = model.strut_compression(model.static(load))
+    n, gas = cfg.polytropic_index, 0.2
+    np.testing.assert_allclose(s, gas * (1 - (w / (w + dw)) ** (1 / n)), rtol=1e-6)
+    linear = GearModel(dataclasses.replace(cfg, strut_spring='linear'))
+    np.testing.assert_allclose(linear.strut_compression(linear.static(load)), gas / n * dw / w, rtol=1e-6)
+    assert s[0] < 0.8 * gas / n * dw / w                          # the air spring stiffens
+
+
+def test_polytropic_free_motion_conserves_energy():
+    # undamped, after a step of the deck's vertical specific force: kinetic + elastic (with the air
+    # springs' nonlinear potential) minus the constant load's potential stays constant
+    cfg = dataclasses.replace(CFG, strut_spring='polytropic', strut_damping_ratio=0.0, tyre_damping_ratio=0.0,
+                              gust_severity='none')
+    rate = 2000.0
+    resp = GearResponse(cfg, 1, rate, np.array([0.0, 0.0, G0]))
+    n = int(4 * rate)
+    f = np.tile([0.3, 0.5, G0 + 3.0], (n, 1))
+    f[0] = [0.0, 0.0, G0]
+    resp.feed(np.arange(n), f, np.zeros((n, 3)))
+    q, qd, _ = resp.states(np.arange(2, n))
+    load = resp.model.inertial_load(f[2], np.zeros(3), resp.f0)
+    e = resp.model.energy(q, qd) - q @ load
+    swing = resp.model.energy(q, qd).max()
+    assert np.abs(resp.model.strut_compression(q)).max() > 0.02        # large enough to be nonlinear
+    assert np.ptp(e) < 1e-5 * swing
 
 
 def test_gust_intensities_are_drydens():
@@ -250,8 +288,10 @@ GEAR = {'aircraft.gear.enabled': True, 'ship.mode': 'spectral', 'ship.sea_state'
         'aircraft.catapult.holdback_s': 2.0}
 
 
-def test_gear_stepping_equals_batch_and_increments_integrate_to_truth():
-    sc = scenario.load('catapult', {**NOISE_OFF, **SHORT, **GEAR, 'aircraft.flexure.enabled': True})
+@pytest.mark.parametrize('spring', ['linear', 'polytropic'])
+def test_gear_stepping_equals_batch_and_increments_integrate_to_truth(spring):
+    sc = scenario.load('catapult', {**NOISE_OFF, **SHORT, **GEAR, 'aircraft.flexure.enabled': True,
+                                    'aircraft.gear.strut_spring': spring})
     ships = pipeline.ship_samples(sc)
     stage = pipeline.SlaveImuStage(sc)
     truth, imu = stage.run_batch(ShipBatch.of(ships))

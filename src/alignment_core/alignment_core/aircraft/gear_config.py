@@ -8,6 +8,7 @@ always has, and no number changes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 from alignment_core.air_data.turbulence_spec import Severity
 from alignment_core.validation import require
@@ -28,6 +29,8 @@ class GearConfig:
     F = F0 (V0 / (V0 - A s))^n has the stiffness k = n F0 / L at the static point, L = V0 / A
     the gas column's length there (`*_gas_length_m`); damping: an equivalent viscous
     coefficient c = 2 zeta sqrt(k m_leg), m_leg the sprung mass the leg carries.
+    `strut_spring`: 'polytropic' keeps the air spring's full law (it stiffens as it compresses),
+    'linear' its tangent at the static point.
     Tyres: vertical, longitudinal and lateral springs (`*_tyre_k*_npm`) with damping
     2 zeta_t sqrt(k m_leg); the vertical tyre carries the unsprung mass (`*_unsprung_kg`).
 
@@ -47,6 +50,7 @@ class GearConfig:
     main_track_m: float = 3.11
     nose_load_fraction: float = 0.12
     imu_from_cg_m: tuple[float, float, float] = (2.5, 0.0, 0.3)
+    strut_spring: Literal['linear', 'polytropic'] = 'polytropic'
     polytropic_index: float = 1.35
     nose_gas_length_m: float = 0.15
     main_gas_length_m: float = 0.20

@@ -6,7 +6,9 @@ and the deck's angular acceleration, airframe axes, from aircraft/gear_on_deck.p
 of the wind over the deck, and the hold-back pull (ramped in by a smoothstep over the catapult's
 tensioning, dropped to zero at the launch sample). The state starts in the quasi-static
 equilibrium of the first sample's load (no start transient) and steps exactly between samples
-with the load linear in between (first-order hold).
+with the load linear in between (first-order hold); with polytropic struts their excess force
+over the linear spring is a load of the state, stepped by a predictor-corrector (Heun's
+method on top of the exact linear step: second order).
 
 Gusts: MIL-F-8785C Dryden (aircraft/wind.py's forms) for a frozen field carried over the deck
 at the wind-over-deck speed V: unit processes of the dimensionless time s = V t / L, exact
@@ -99,6 +101,7 @@ class GearResponse:
         self._n = 0
         self._x: np.ndarray | None = None
         self._load: np.ndarray | None = None
+        self._excess: np.ndarray | None = None          # the air springs' load at the last sample
 
     @property
     def n(self) -> int:
@@ -137,9 +140,15 @@ class GearResponse:
                 f = f + self.gust_b @ self.gust.step(noise[j])
             if self._x is None:
                 self._x = np.concatenate([self.model.static(f), np.zeros(N_DOF)])
-            else:
+            elif self._excess is None:
                 self._x = self.phi @ self._x + self.g0 @ self._load + self.g1 @ f
+            else:                                       # air springs: their excess predicted, then corrected
+                base = self.phi @ self._x + self.g0 @ (self._load + self._excess)
+                pred = base + self.g1 @ (f + self._excess)
+                self._x = base + self.g1 @ (f + self.model.nonlinear_load(pred[:N_DOF]))
             self._load = f
+            if self.model.polytropic:
+                self._excess = self.model.nonlinear_load(self._x[:N_DOF])
             q, qd = self._x[:N_DOF], self._x[N_DOF:]
             self._q[self._n], self._qd[self._n] = q, qd
             self._qdd[self._n] = self.model.acceleration(q, qd, f)

@@ -21,6 +21,9 @@ Gyroscopic and Coriolis terms of the deck's rotation (|omega| ~ 0.01 rad/s) are 
 
 With f linear between samples (first-order hold) the response is exact at the samples:
 x_(k+1) = Phi x_k + G0 f_k + G1 f_(k+1), x = [q, q'] (18,), from one matrix exponential.
+With `strut_spring: polytropic` the air springs' force beyond their tangent at the static
+point, F0 ((1 - s / L)^-n - 1 - n s / L) for a compression s, joins f as a load of the state
+(gear_response.py steps it by a predictor-corrector).
 """
 from __future__ import annotations
 
@@ -73,6 +76,9 @@ class GearModel:
         self.unsprung = per_leg(cfg.nose_unsprung_kg, cfg.main_unsprung_kg)
         self.inertia = np.asarray(cfg.inertia_kgm2, dtype=float)
         self.M = np.diag(np.concatenate([np.full(3, m), self.inertia, self.unsprung]))
+        self.strut_rows = np.array([self._strut_row(i, p) for i, p in enumerate(self.contact)])   # (3, 9)
+        self.gas = gas
+        self.polytropic = cfg.strut_spring == 'polytropic'
         self.K_elastic, self.C = self._assemble()
         self.K = self.K_elastic.copy()
         self.K[3, 3] -= m * G0 * h
@@ -81,13 +87,19 @@ class GearModel:
             raise ValueError("aircraft.gear: the gear is not stable (roll or pitch stiffness below m g h): "
                              "widen the track or wheelbase, stiffen the struts or lower the CG")
 
+    @staticmethod
+    def _strut_row(i: int, p: np.ndarray) -> np.ndarray:
+        """(9,): the strut's extension (airframe up relative to its axle) of leg i from q."""
+        row = _airframe_rows(p)[2].copy()
+        row[6 + i] = -1.0
+        return row
+
     def _assemble(self) -> tuple[np.ndarray, np.ndarray]:
         k = np.zeros((N_DOF, N_DOF))
         c = np.zeros((N_DOF, N_DOF))
         for i, p in enumerate(self.contact):
             rows = _airframe_rows(p)
-            strut = rows[2].copy()
-            strut[6 + i] = -1.0                                          # airframe minus axle
+            strut = self.strut_rows[i]
             k += self.strut_k[i] * np.outer(strut, strut)
             c += self.strut_c[i] * np.outer(strut, strut)
             axle = np.zeros(N_DOF)
@@ -152,8 +164,22 @@ class GearModel:
 
     # --- responses ------------------------------------------------------------------------------
     def static(self, load: np.ndarray) -> np.ndarray:
-        """q (9,) in equilibrium under a constant load (9,) added to the static one."""
-        return np.linalg.solve(self.K, load)
+        """q (9,) in equilibrium under a constant load (9,) added to the static one (Newton's
+        method with the polytropic springs)."""
+        q = np.linalg.solve(self.K, load)
+        if not self.polytropic:
+            return q
+        n, L = self.cfg.polytropic_index, self.gas
+        for _ in range(50):
+            resid = self.K @ q - self.nonlinear_load(q) - load
+            x = self.strut_compression(q) / L
+            slope = self.leg_load_n * n / L * ((1.0 - x) ** (-n - 1.0) - 1.0)   # d(excess)/d(compression)
+            jac = self.K + (self.strut_rows.T * slope) @ self.strut_rows
+            step = np.linalg.solve(jac, resid)
+            q = q - step
+            if np.abs(step).max() < 1e-13:
+                break
+        return q
 
     def settling(self, g: float = G0) -> np.ndarray:
         """q (9,) of the unloaded gear (extended struts, round tyres) relative to the static
@@ -162,8 +188,33 @@ class GearModel:
         return -np.linalg.solve(self.K_elastic, self.gravity_load(g))
 
     def strut_compression(self, q: np.ndarray) -> np.ndarray:
-        """Strut shortening (3,) (airframe down relative to its axle: positive)."""
-        return np.array([-(_airframe_rows(p)[2] @ q - q[6 + i]) for i, p in enumerate(self.contact)])
+        """Strut shortening (..., 3) from the static point (airframe down relative to its axle: positive)."""
+        return -np.asarray(q) @ self.strut_rows.T
+
+    def air_spring_excess(self, compression: np.ndarray) -> np.ndarray:
+        """Polytropic strut force beyond its tangent at the static point (..., 3), N (compression
+        positive): F0 ((1 - s / L)^-n - 1 - n s / L); zero for the linear spring."""
+        if not self.polytropic:
+            return np.zeros(np.shape(compression))
+        x = np.asarray(compression) / self.gas
+        if np.any(x >= 0.95):
+            raise ValueError("aircraft.gear: a strut compressed to within 5 % of its gas column "
+                             "(bottoming out): beyond the air spring model")
+        n = self.cfg.polytropic_index
+        return self.leg_load_n * ((1.0 - x) ** -n - 1.0 - n * x)
+
+    def nonlinear_load(self, q: np.ndarray) -> np.ndarray:
+        """Generalised force (..., 9) of the air springs' excess over their linear part."""
+        return self.air_spring_excess(self.strut_compression(q)) @ self.strut_rows
+
+    def air_spring_energy(self, q: np.ndarray) -> np.ndarray:
+        """Potential energy (...) of the air springs' excess (J): the integral of the excess force."""
+        if not self.polytropic:
+            return np.zeros(np.shape(q)[:-1])
+        s = self.strut_compression(q)
+        n, L = self.cfg.polytropic_index, self.gas
+        x = s / L
+        return (self.leg_load_n * L * (((1.0 - x) ** (1.0 - n) - 1.0) / (n - 1.0) - x - 0.5 * n * x * x)).sum(axis=-1)
 
     def state_space(self) -> tuple[np.ndarray, np.ndarray]:
         """A (18, 18) and B (18, 9) of x' = A x + B f, x = [q, q']."""
@@ -189,12 +240,14 @@ class GearModel:
         return phi, p - r, r
 
     def acceleration(self, q: np.ndarray, qd: np.ndarray, load: np.ndarray) -> np.ndarray:
-        """q'' (..., 9) from the equations of motion."""
-        return (load - qd @ self.C.T - q @ self.K.T) / np.diag(self.M)
+        """q'' (..., 9) from the equations of motion (load: the external one; the air springs'
+        excess is added here)."""
+        return (load + self.nonlinear_load(q) - qd @ self.C.T - q @ self.K.T) / np.diag(self.M)
 
     def energy(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """Kinetic plus elastic energy (J) about the static point."""
-        return 0.5 * (np.einsum('...i,ij,...j->...', qd, self.M, qd) + np.einsum('...i,ij,...j->...', q, self.K, q))
+        return (0.5 * (np.einsum('...i,ij,...j->...', qd, self.M, qd) + np.einsum('...i,ij,...j->...', q, self.K, q))
+                + self.air_spring_energy(q))
 
     def natural_frequencies_hz(self) -> np.ndarray:
         """Undamped natural frequencies (9,), ascending."""
