@@ -24,6 +24,7 @@ from alignment_core.aircraft.landing_gear import N_DOF, GearModel
 from alignment_core.config import scenario
 from alignment_core.samples import ShipBatch
 from alignment_core.units import G0
+from alignment_core.validation import ConfigError
 
 CFG = GearConfig(enabled=True)
 LINEAR = dataclasses.replace(CFG, strut_spring='linear')     # the tangent model, for the linear closed forms
@@ -246,6 +247,11 @@ def test_polytropic_free_motion_conserves_energy():
     swing = resp.model.energy(q, qd).max()
     assert np.abs(resp.model.strut_compression(q)).max() > 0.02        # large enough to be nonlinear
     assert np.ptp(e) < 1e-5 * swing
+
+
+def test_a_gear_that_would_tip_over_is_refused():
+    with pytest.raises(ConfigError, match='not stable'):
+        GearModel(dataclasses.replace(CFG, cg_height_m=5.0, main_track_m=1.0))
 
 
 def test_gust_intensities_are_drydens():

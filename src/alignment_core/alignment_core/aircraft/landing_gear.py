@@ -33,6 +33,7 @@ from scipy.linalg import expm
 from alignment_core.aircraft.gear_config import GearConfig
 from alignment_core.geometry.rotations import skew
 from alignment_core.units import G0
+from alignment_core.validation import ConfigError
 
 LEGS = ('nose', 'main_left', 'main_right')
 N_DOF = 9
@@ -84,7 +85,7 @@ class GearModel:
         self.K[3, 3] -= m * G0 * h
         self.K[4, 4] -= m * G0 * h
         if np.any(np.linalg.eigvalsh(self.K) <= 0.0):
-            raise ValueError("aircraft.gear: the gear is not stable (roll or pitch stiffness below m g h): "
+            raise ConfigError("aircraft.gear: the gear is not stable (roll or pitch stiffness below m g h): "
                              "widen the track or wheelbase, stiffen the struts or lower the CG")
 
     @staticmethod
