@@ -1,4 +1,5 @@
-"""The airframe on its landing gear: a linear 9-degree-of-freedom model about the static point.
+"""The airframe on its landing gear: a 9-degree-of-freedom model about the static point, linear
+but for the polytropic air springs' excess over their tangent.
 
 Generalised coordinates q (9,), all relative to the static equilibrium on a level deck at rest,
 in the airframe's axes on deck (FLU, the deck turned by the heading on deck):
