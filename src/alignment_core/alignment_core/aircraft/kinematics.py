@@ -29,6 +29,12 @@ Optional effects (all off by default, leaving the default output bit-identical):
   + J_r(theta) theta'; the aircraft truth attitude carries it (the true relative attitude),
   while the reported misalignment stays the mounting mu. The catapult track stays the
   mounted aircraft x axis C_a^s(mu) e_x (the deck rail does not follow the flexure).
+- aircraft.gear (landing_gear.py, gear_response.py, gear_on_deck.py): the airframe on its landing gear, driven by
+  the deck's motion at the rigidly mounted CG, gusts and the hold-back pull; the IMU point moves
+  by C_d^s d_imu(t) (C_d^s: the heading on deck) and the airframe turns by theta_g (airframe
+  axes), which enters as a relative rotation exp(-mu) theta_g added to the flexure's theta
+  (C_a^s = exp([mu x]) exp([(theta_f + exp(-mu) theta_g) x]) after the heading; the sum of the
+  two small rotation vectors stands for their composition). The reported misalignment stays mu.
 - output='sample' (imu.output): point values of omega_ib^a and f^a at the end of each interval
   (times the interval, so the error model's increment / interval gives the point value).
 """
@@ -43,6 +49,8 @@ from alignment_core.aircraft.catapult import CatapultConfig, CatapultMotion, che
 from alignment_core.aircraft.deck_flexure import FlexureConfig, FlexureProcess
 from alignment_core.aircraft.flight import FlightPath, airborne_start
 from alignment_core.aircraft.flight_config import FlightConfig
+from alignment_core.aircraft.gear_config import GearConfig
+from alignment_core.aircraft.gear_on_deck import GearOnDeck
 from alignment_core.aircraft.vibration import Vibration, VibrationConfig
 from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import (
@@ -79,6 +87,7 @@ class AircraftConfig:
     vibration: VibrationConfig = field(default_factory=VibrationConfig)
     flexure: FlexureConfig = field(default_factory=FlexureConfig)
     flight: FlightConfig = field(default_factory=FlightConfig)
+    gear: GearConfig = field(default_factory=GearConfig)
 
     def validate(self) -> None:
         r = np.asarray(self.lever_arm_m)
@@ -132,12 +141,25 @@ class AircraftKinematics:
         self.vib = Vibration(vib, self.launch) if (vib.enabled and cat.enabled) else None
         self.vib_motion = self.vib is not None and vib.mode == 'motion'
         self.flex = FlexureProcess(cfg.flexure, seed, rate_hz) if cfg.flexure.enabled else None
+        self.gear: GearOnDeck | None = None
+        if cfg.gear.enabled:
+            holdback = None
+            if cat.enabled and cat.holdback_s > 0.0:
+                holdback = (self.catapult.holdback_start, self.launch)
+            self.gear = GearOnDeck(cfg.gear, cfg.heading_on_deck_deg, self.mu, self.r0, plane, seed, rate_hz,
+                                   holdback, self._imu)
+        self.has_rot = self.flex is not None or self.gear is not None
 
     def _flex_at(self, tau):
-        """(theta, theta') at the sample instants tau, or None without flexure."""
+        """(theta, theta') of the relative rotation (flexure and gear, aircraft axes) at the sample
+        instants tau, or None without either."""
+        if self.gear is None:
+            return None if self.flex is None else self.flex.at(self.flex.index(tau))
+        th, thd = self.gear.rotation(tau)
         if self.flex is None:
-            return None
-        return self.flex.at(self.flex.index(tau))
+            return th, thd
+        tf, tfd = self.flex.at(self.flex.index(tau))
+        return tf + th, tfd + thd
 
     def _c_sa(self, flex):
         return self.c_sa if flex is None else self.c_sa @ rotvec_to_dcm_batch(flex[0])
@@ -145,17 +167,22 @@ class AircraftKinematics:
     def relative(self, tau: np.ndarray, vib_acc: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """r, r', r'' (..., 3) in ship axes at times tau (...) (s since scenario start), on deck.
         With motion-mode vibration, its displacement and velocity are included, and its
-        acceleration unless vib_acc is False (the increments add that part exactly)."""
+        acceleration unless vib_acc is False (the increments add that part exactly); with the
+        gear, the IMU point's motion on it."""
         tau = np.asarray(tau, dtype=float)
         if not self.enabled:
             z = np.zeros(tau.shape + (3,))
-            return self.r0 + z, z, z
-        s, sd, sdd = self.catapult.along(tau)
-        r = self.r0 + s[..., None] * self.track
+            r, rd, rdd = self.r0 + z, z, z
+        else:
+            s, sd, sdd = self.catapult.along(tau)
+            r = self.r0 + s[..., None] * self.track
+            rd, rdd = sd[..., None] * self.track, sdd[..., None] * self.track
+        if self.gear is not None:
+            d, v, a = self.gear.displacement(tau)
+            r, rd, rdd = r + d, rd + v, rdd + a
         if not self.vib_motion:
-            return r, sd[..., None] * self.track, sdd[..., None] * self.track
-        rd = sd[..., None] * self.track + self.vib.vel(tau) @ self.c_sa.T
-        rdd = sdd[..., None] * self.track
+            return r, rd, rdd
+        rd = rd + self.vib.vel(tau) @ self.c_sa.T
         if vib_acc:
             rdd = rdd + self.vib.acc(tau) @ self.c_sa.T
         return r + self.vib.pos(tau) @ self.c_sa.T, rd, rdd
@@ -211,6 +238,8 @@ class AircraftKinematics:
         tau = np.asarray(tau, dtype=float)
         c_nb = quat_to_dcm_batch(sb.q_nb)
         on = tau <= self.release
+        if self.gear is not None and np.any(on):
+            self.gear.feed(sb.slice(on), tau[on])
         c_na = np.empty((len(tau), 3, 3))
         w_na = np.zeros((len(tau), 3))
         v_p = np.empty((len(tau), 3))
@@ -221,12 +250,12 @@ class AircraftKinematics:
             flex = self._flex_at(tau[on])
             c_na[on], w_na[on], v_p[on], _, p_p[on] = self._on_deck(
                 c_nb[on], sb.w_b[on], sb.wdot_b[on], v_n, a_n, sb.p_w[on], tau[on], flex)
-        if self.flex is None:
+        if not self.has_rot:
             q_sa = self.q_sa
         else:
             q_sa = np.broadcast_to(self.q_sa, (len(tau), 4)).copy()
             if np.any(on):
-                th = self.flex.at(self.flex.index(tau[on]))[0]
+                th = self._flex_at(tau[on])[0]
                 q_sa[on] = quat_mul_batch(self.q_sa, Rotation.from_rotvec(th).as_quat())
         q = quat_mul_batch(sb.q_nb, q_sa)
         if np.any(on):
@@ -234,7 +263,7 @@ class AircraftKinematics:
             if len(rel):
                 k = rel[0]
                 self.release_state = (c_na[k].copy(), v_p[k].copy(), p_p[k].copy())
-                self.release_quat = q[k].copy() if self.flex is not None else quat_mul_batch(sb.q_nb[k], self.q_sa)
+                self.release_quat = q[k].copy() if self.has_rot else quat_mul_batch(sb.q_nb[k], self.q_sa)
                 self.release_v_world = self.plane.c_local_to_world(p_p[k]) @ v_p[k]
                 if self.flying and self.path is None:
                     self.path = FlightPath(self.cfg.flight, self.plane, tau[k], v_p[k], p_p[k],
@@ -303,7 +332,10 @@ class AircraftKinematics:
             a_n = herm(v0, a0, v1, a1, d00, d10, d01, d11) / hk
             p_w = (1.0 - uu) * a.p_w[:, None] + uu * b.p_w[:, None]
             flex = None
-            if self.flex is not None:
+            if self.gear is not None:
+                self.gear.feed(a, tau0[deck])
+                self.gear.feed(b, tau0[deck] + h[deck])
+            if self.has_rot:
                 (t0, d0), (t1, d1) = self._flex_at(tau0[deck]), self._flex_at(tau0[deck] + h[deck])
                 flex = (herm(t0, d0, t1, d1, h00, h10, h01, h11),
                         herm(t0, d0, t1, d1, d00, d10, d01, d11) / hk)
@@ -356,7 +388,7 @@ class AircraftKinematics:
         if not self.vib_motion:
             return dv
         dv = np.where(deck[:, None], dv, 0.0)
-        if self.flex is not None and np.any(deck):
+        if self.has_rot and np.any(deck):
             (t0, _), (t1, _) = self._flex_at(tau0[deck]), self._flex_at(tau1[deck])
             c = rotvec_to_dcm_batch(0.5 * (t0 + t1))
             dv[deck] = np.einsum('kji,kj->ki', c, dv[deck])

@@ -1,0 +1,207 @@
+"""The airframe's motion on its gear at the scenario's samples, driven by the deck, the wind
+over the deck and the hold-back tension (the linear model of aircraft/landing_gear.py).
+
+Loads at sample k: the deck's motion (specific force at the CG of the rigidly mounted airframe
+and the deck's angular acceleration, airframe axes, from aircraft/gear_on_deck.py), Dryden gusts
+of the wind over the deck, and the hold-back pull (ramped in by a smoothstep over the catapult's
+tensioning, dropped to zero at the launch sample). The state starts in the quasi-static
+equilibrium of the first sample's load (no start transient) and steps exactly between samples
+with the load linear in between (first-order hold); with polytropic struts their excess force
+over the linear spring is a load of the state, stepped by a predictor-corrector (Heun's
+method on top of the exact linear step: second order).
+
+Gusts: MIL-F-8785C Dryden (aircraft/wind.py's forms) for a frozen field carried over the deck
+at the wind-over-deck speed V: unit processes of the dimensionless time s = V t / L, exact
+transitions over each sample, stationary start; stream stage_rng(seed, 'gear_gust').
+
+Samples are simulated in index order as the ship samples are fed (`feed`, one at a time or
+all at once: the same operations, so stepping and batch agree bit for bit). Between samples
+the IMU point's displacement is the quintic Hermite through the samples' displacement,
+velocity and acceleration (one smooth motion whose derivatives are consistent for the
+increments); the rotation is given at the samples (the kinematics interpolates it as it does
+the deck flexure).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from alignment_core.air_data.turbulence_spec import MIN_AIRSPEED, dryden_parameters
+from alignment_core.aircraft.gear_config import GearConfig
+from alignment_core.aircraft.landing_gear import N_DOF, GearModel
+from alignment_core.rng import stage_rng
+
+_SAMPLE_TOL = 1e-9
+
+
+def _second_order_transition(ds: float) -> np.ndarray:
+    """Phi (2, 2) of z'' + 2 z' + z = n (unit time) over ds."""
+    return np.exp(-ds) * np.array([[1.0 + ds, ds], [-ds, 1.0 - ds]])
+
+
+class DeckGust:
+    """Dryden gust velocities (u, v, w) over the deck at the samples, m/s (module docstring)."""
+
+    def __init__(self, cfg: GearConfig, seed: int, dt: float) -> None:
+        self.on = cfg.gust_severity != 'none'
+        if not self.on:
+            return
+        par = dryden_parameters(cfg.gust_height_m, cfg.gust_severity)
+        self.sigma = np.array([float(par.sigma_u), float(par.sigma_v), float(par.sigma_w)])
+        speed = max(cfg.wind_over_deck_mps, MIN_AIRSPEED)
+        ds = speed * dt / np.array([float(par.length_u), float(par.length_v), float(par.length_w)])
+        self.phi = np.zeros((5, 5))
+        self.root = np.zeros((5, 5))
+        self.phi[0, 0] = np.exp(-ds[0])
+        self.root[0, 0] = np.sqrt(1.0 - self.phi[0, 0] ** 2)
+        p2 = 0.25 * np.eye(2)
+        for j, sl in ((1, slice(1, 3)), (2, slice(3, 5))):
+            phi2 = _second_order_transition(ds[j])
+            self.phi[sl, sl] = phi2
+            self.root[sl, sl] = np.linalg.cholesky(p2 - phi2 @ p2 @ phi2.T)
+        self.rng = stage_rng(seed, 'gear_gust')
+        self.x: np.ndarray | None = None
+        self.out = np.array([[1.0, 0, 0, 0, 0], [0, 1.0, np.sqrt(3.0), 0, 0], [0, 0, 0, 1.0, np.sqrt(3.0)]])
+
+    def draw(self, n: int) -> np.ndarray:
+        """Normal numbers (n, 5) for the next n samples."""
+        return self.rng.standard_normal((n, 5))
+
+    def step(self, noise: np.ndarray) -> np.ndarray:
+        """The gust (3,) at the next sample from its noise (5,)."""
+        if self.x is None:
+            self.x = noise * np.array([1.0, 0.5, 0.5, 0.5, 0.5])           # stationary start
+        else:
+            self.x = self.phi @ self.x + self.root @ noise
+        return self.sigma * (self.out @ self.x)
+
+
+class GearResponse:
+    """q, q', q'' (9,) of the airframe on its gear at sample indices k = round(tau * rate_hz),
+    and the IMU point's motion (airframe axes) at any time on the deck."""
+
+    def __init__(self, cfg: GearConfig, seed: int, rate_hz: float, f0: np.ndarray,
+                 holdback: tuple[float, float] | None = None) -> None:
+        """f0 (3,): the static point's specific force (airframe axes); holdback: (start, launch)
+        of the tensioning in scenario time (s), or None."""
+        self.cfg = cfg
+        self.model = GearModel(cfg)
+        self.rate_hz = rate_hz
+        self.dt = 1.0 / rate_hz
+        self.dt_ns = int(round(1e9 / rate_hz))              # sample k is at tau = k dt_ns / 1e9, as stamps give it
+        self.f0 = np.asarray(f0, dtype=float)
+        self.phi, self.g0, self.g1 = self.model.discretise(self.dt)
+        self.gust = DeckGust(cfg, seed, self.dt)
+        self.gust_b = self.model.gust_matrix()
+        self.holdback = holdback if cfg.holdback_tension_n > 0.0 else None
+        self.holdback_b = self.model.holdback_load()
+        self.imu_rows = self.model.point_rows(np.asarray(cfg.imu_from_cg_m, dtype=float))
+        self._q = np.empty((1024, N_DOF))
+        self._qd = np.empty((1024, N_DOF))
+        self._qdd = np.empty((1024, N_DOF))
+        self._n = 0
+        self._x: np.ndarray | None = None
+        self._load: np.ndarray | None = None
+        self._excess: np.ndarray | None = None          # the air springs' load at the last sample
+
+    @property
+    def n(self) -> int:
+        """Samples simulated so far (indices 0 .. n - 1)."""
+        return self._n
+
+    def holdback_tension(self, tau: np.ndarray) -> np.ndarray:
+        """Hold-back tension (N) at scenario times tau."""
+        tau = np.asarray(tau, dtype=float)
+        if self.holdback is None:
+            return np.zeros(tau.shape)
+        start, launch = self.holdback
+        x = np.clip((tau - start) / (launch - start), 0.0, 1.0)
+        ramp = x**3 * (10.0 - 15.0 * x + 6.0 * x * x)
+        return np.where(tau < launch, self.cfg.holdback_tension_n * ramp, 0.0)
+
+    def feed(self, k: np.ndarray, specific_force: np.ndarray, wdot: np.ndarray) -> None:
+        """Simulate the samples k (K,), increasing, with the deck's specific force and angular
+        acceleration there (K, 3; airframe axes); samples already simulated are skipped, new
+        ones must follow on without a gap."""
+        k = np.asarray(k, dtype=np.int64)
+        new = k >= self._n
+        if not np.any(new):
+            return
+        k = k[new]
+        if k[0] != self._n or np.any(np.diff(k) != 1):
+            raise ValueError(f"gear samples must be fed in order without gaps: expected {self._n}, got {k[0]}")
+        load = self.model.inertial_load(specific_force[new], wdot[new], self.f0)
+        if self.holdback is not None:
+            load = load + self.holdback_tension(k * self.dt_ns / 1e9)[:, None] * self.holdback_b
+        noise = self.gust.draw(len(k)) if self.gust.on else None
+        self._grow(self._n + len(k))
+        for j in range(len(k)):
+            f = load[j]
+            if noise is not None:
+                f = f + self.gust_b @ self.gust.step(noise[j])
+            if self._x is None:
+                self._x = np.concatenate([self.model.static(f), np.zeros(N_DOF)])
+            elif self._excess is None:
+                self._x = self.phi @ self._x + self.g0 @ self._load + self.g1 @ f
+            else:                                       # air springs: their excess predicted, then corrected
+                base = self.phi @ self._x + self.g0 @ (self._load + self._excess)
+                pred = base + self.g1 @ (f + self._excess)
+                self._x = base + self.g1 @ (f + self.model.nonlinear_load(pred[:N_DOF]))
+            self._load = f
+            if self.model.polytropic:
+                self._excess = self.model.nonlinear_load(self._x[:N_DOF])
+            q, qd = self._x[:N_DOF], self._x[N_DOF:]
+            self._q[self._n], self._qd[self._n] = q, qd
+            self._qdd[self._n] = self.model.acceleration(q, qd, f)
+            self._n += 1
+
+    def _grow(self, n: int) -> None:
+        while n > len(self._q):
+            self._q, self._qd, self._qdd = (np.concatenate([a, np.empty_like(a)])
+                                            for a in (self._q, self._qd, self._qdd))
+
+    def states(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """q, q', q'' (..., 9) at simulated sample indices k (...)."""
+        k = np.asarray(k, dtype=np.int64)
+        if k.size and (k.min() < 0 or k.max() >= self._n):
+            raise RuntimeError(f"gear sample {int(k.max())} not simulated yet ({self._n} so far): "
+                               "the aircraft truth feeds the gear before the increments use it")
+        return self._q[k], self._qd[k], self._qdd[k]
+
+    def index(self, tau) -> np.ndarray:
+        return np.rint(np.asarray(tau, dtype=float) * self.rate_hz).astype(np.int64)
+
+    def rotation_at(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """theta, theta' (..., 3) of the airframe at sample indices k."""
+        q, qd, _ = self.states(k)
+        return q[..., 3:6], qd[..., 3:6]
+
+    def imu_at(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The IMU point's displacement, velocity and acceleration (..., 3) at sample indices k."""
+        q, qd, qdd = self.states(k)
+        return tuple(np.einsum('ij,...j->...i', self.imu_rows, x) for x in (q, qd, qdd))
+
+    def imu_motion(self, tau) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The IMU point's displacement, velocity, acceleration (..., 3) at scenario times tau
+        (...): the samples' values at sample instants, the quintic Hermite in between."""
+        x = np.asarray(tau, dtype=float) * self.rate_hz
+        k = np.floor(x + _SAMPLE_TOL).astype(np.int64)
+        u = x - k
+        at_sample = np.abs(u) < _SAMPLE_TOL
+        u = np.where(at_sample, 0.0, u)[..., None]
+        d0, v0, a0 = self.imu_at(k)
+        if np.all(at_sample):
+            return d0, v0, a0
+        d1, v1, a1 = self.imu_at(np.where(at_sample, k, k + 1))
+        h = self.dt
+        u2, u3, u4, u5 = u * u, u**3, u**4, u**5
+        pos = ((1 - 10*u3 + 15*u4 - 6*u5) * d0 + (u - 6*u3 + 8*u4 - 3*u5) * h * v0
+               + 0.5 * (u2 - 3*u3 + 3*u4 - u5) * h * h * a0 + (10*u3 - 15*u4 + 6*u5) * d1
+               + (-4*u3 + 7*u4 - 3*u5) * h * v1 + 0.5 * (u3 - 2*u4 + u5) * h * h * a1)
+        vel = ((-30*u2 + 60*u3 - 30*u4) * d0 / h + (1 - 18*u2 + 32*u3 - 15*u4) * v0
+               + 0.5 * (2*u - 9*u2 + 12*u3 - 5*u4) * h * a0 + (30*u2 - 60*u3 + 30*u4) * d1 / h
+               + (-12*u2 + 28*u3 - 15*u4) * v1 + 0.5 * (3*u2 - 8*u3 + 5*u4) * h * a1)
+        acc = ((-60*u + 180*u2 - 120*u3) * d0 / (h * h) + (-36*u + 96*u2 - 60*u3) * v0 / h
+               + 0.5 * (2 - 18*u + 36*u2 - 20*u3) * a0 + (60*u - 180*u2 + 120*u3) * d1 / (h * h)
+               + (-24*u + 84*u2 - 60*u3) * v1 / h + 0.5 * (6*u - 24*u2 + 20*u3) * a1)
+        s = at_sample[..., None]
+        return np.where(s, d0, pos), np.where(s, v0, vel), np.where(s, a0, acc)
