@@ -74,6 +74,7 @@ class AircraftConfig:
     lever_arm_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
     misalignment_arcmin: tuple[float, float, float] = (15.0, -10.0, -30.0)
     misalignment_random_arcmin: float = 0.0
+    lever_arm_survey_sigma_m: float = 0.0   # 1-sigma survey error of filter.lever_arm_m (config/given.py)
     heading_on_deck_deg: float = 0.0
     catapult: CatapultConfig = field(default_factory=CatapultConfig)
     vibration: VibrationConfig = field(default_factory=VibrationConfig)
@@ -90,6 +91,8 @@ class AircraftConfig:
                 f"misalignment_random_arcmin must be in [0, 120], got {self.misalignment_random_arcmin}")
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
                 f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
+        require(0.0 <= self.lever_arm_survey_sigma_m <= 10.0,
+                f"lever_arm_survey_sigma_m must be in [0, 10] m, got {self.lever_arm_survey_sigma_m}")
         require(self.flight.start == 'deck' or not self.catapult.enabled,
                 "flight.start airborne has no deck phase: set catapult.enabled false")
 

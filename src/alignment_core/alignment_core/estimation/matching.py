@@ -74,6 +74,18 @@ class MatchResults:
     anchor: tuple[np.ndarray, np.ndarray] | None = None    # (C_m (3, 3), slave q_nb (4,))
 
 
+def _interval_containing(intervals: deque[tuple[int, float, np.ndarray, np.ndarray]], t_v: int
+                         ) -> tuple[int, float, np.ndarray, np.ndarray] | None:
+    """The IMU interval (t_end, h, gyro, dv_n) with t_end - h < t_v < t_end: the deck spot's
+    acceleration for a validity time between IMU samples (a master stamp with transport jitter)."""
+    for item in reversed(intervals):
+        if item[0] - item[1] * 1e9 < t_v < item[0]:
+            return item
+        if item[0] < t_v:
+            return None
+    return None
+
+
 class Matcher:
     """Master and Doppler updates for one engine: the reference (lever arm, deck velocity), the
     measurement from the model, the update and the closed-loop feedback."""
@@ -177,8 +189,9 @@ class Matcher:
             if item[0] < t_v:
                 break
         a_n = None
-        if not ref.moving and iv is not None:
-            a_n = iv[3] / iv[1]
+        parked_iv = iv if iv is not None else _interval_containing(self._intervals, t_v)
+        if not ref.moving and parked_iv is not None:
+            a_n = parked_iv[3] / parked_iv[1]
         elif ref.moving and prev is not None and prev[0] < t_v:
             fixed = cross3(m.w_b, r) + v_rel
             a_n = (c_m @ (m.v_b + fixed) - prev[1] @ (prev[2] + cross3(prev[3], r) + v_rel)) / ((t_v - prev[0]) * 1e-9)
