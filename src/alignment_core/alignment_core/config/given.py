@@ -78,6 +78,7 @@ FOLLOWS = {
     'filter.heading_on_deck_deg': 'aircraft.heading_on_deck_deg',   # the nominal mounting on deck
     'ldv.track_heading_deg': 'aircraft.heading_on_deck_deg',        # the beam along the track
     'ldv.track_length_m': 'aircraft.catapult',       # hold-back creep + stroke + LDV_TRACK_MARGIN_M
+    'filter.ldv_mode': 'ldv.mode',                   # the LDV installed: vector or beam
 }
 """Key not given -> the given key (or section) its value follows (see `fill_defaults`)."""
 

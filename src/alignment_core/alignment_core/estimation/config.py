@@ -12,6 +12,7 @@ LINEAR_ALGORITHMS = ('kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'ca
 NONLINEAR_ALGORITHMS = ('ekf', 'ukf', 'ckf')
 ATTITUDE_MODELS = ('seed003_21', 'seed003_24')               # attitude-match rows and mounting states
 RATE_MODELS = ('vm12', 'vm15', 'seed003_21', 'seed003_24')   # phi and eps states: rate matching
+BEAM_MODELS = ('vm12', 'vm15', 'seed000_6', 'seed003_21', 'seed003_24')   # linear, three velocity rows first
 
 
 @dataclass(frozen=True)
@@ -97,6 +98,7 @@ class FilterConfig:
     rate_match_sigma_dph: float = 1.0         # white noise of the rate match beyond the gyro's ARW
     master_delay_state: bool = False          # + the master's unknown latency as a state (models/master_delay.py)
     master_delay_sigma_ms: float = 20.0       # ... its prior 1-sigma
+    ldv_mode: Literal['vector', 'beam'] = 'vector'   # the LDV installed (follows ldv.mode): beam = one row along it
 
     def validate(self) -> None:
         for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
@@ -135,6 +137,15 @@ class FilterConfig:
                 f"flexure_sigma_arcmin and flexure_tau_s must be > 0, got {self.flexure_sigma_arcmin}, "
                 f"{self.flexure_tau_s}")
         self.validate_combination()
+        self.validate_ldv_mode()
+
+    def validate_ldv_mode(self) -> None:
+        """A beam LDV's one row projects the three velocity rows on the line of sight
+        (models/beam.py): a linear model whose first three rows are E, N, U velocity."""
+        require(self.ldv_mode in ('vector', 'beam'), f"ldv_mode must be 'vector' or 'beam', got {self.ldv_mode!r}")
+        require(self.ldv_mode == 'vector' or self.model in BEAM_MODELS,
+                f"ldv_mode beam projects the three velocity rows on the beam: it needs one of "
+                f"{', '.join(BEAM_MODELS)}, got {self.model}")
 
     def validate_monitoring(self) -> None:
         """Plausibility limits, gap handling, the gate and the consistency monitor."""

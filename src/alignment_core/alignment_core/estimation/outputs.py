@@ -62,6 +62,7 @@ class Counters:
     bridged_gaps: int = 0             # IMU gaps bridged (longer than gap_bridge_factor intervals)
     gate_released: int = 0            # updates taken after gate_release_updates gated ones in a row
     consistency_failures: int = 0     # NIS windows above their chi-square bound
+    rejected_ldv_mode: int = 0        # LDV samples not of the kind filter.ldv_mode says (beam / vector)
 
 
 @dataclass(frozen=True)
