@@ -63,7 +63,8 @@ def _flat(sc) -> dict:
 # ---- what each node declares ------------------------------------------------------------
 
 FILTER_EXTRA = {'rate_hz', 'ship.lat_deg', 'ship.lon_deg', 'aircraft.lever_arm_m', 'aircraft.heading_on_deck_deg',
-                'seed', 'aircraft.lever_arm_survey_sigma_m'}     # the last two: to draw the survey error
+                'seed', 'aircraft.lever_arm_survey_sigma_m',     # these two: to draw the survey error
+                'ldv.mode'}                                      # the LDV installed: vector or beam
 
 
 def test_filter_node_declares_filter_and_what_a_user_knows(make_node):
@@ -72,7 +73,8 @@ def test_filter_node_declares_filter_and_what_a_user_knows(make_node):
     want = {f'filter.{f.name}' for f in dataclasses.fields(FilterConfig)} | FILTER_EXTRA
     assert keys == want
     # no simulation section: nothing of the ship's motion, the aircraft's truth or the sensors
-    assert not [k for k in keys if k.split('.')[0] in ('master', 'imu', 'ldv', 'doppler', 'duration_s')]
+    assert not [k for k in keys if k.split('.')[0] in ('master', 'imu', 'ldv', 'doppler', 'duration_s')
+                and k not in FILTER_EXTRA]
     assert not [k for k in keys if k.startswith(('ship.', 'aircraft.')) and k not in FILTER_EXTRA]
 
 
