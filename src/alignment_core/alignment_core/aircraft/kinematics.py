@@ -70,7 +70,8 @@ class AircraftConfig:
     (x fwd/roll, y left, z up/yaw). heading_on_deck_deg: the aircraft's (and the catapult
     track's) nominal heading from the ship's bow, clockwise (0: a bow catapult).
     misalignment_random_arcmin > 0 adds a random constant per axis (1-sigma, drawn once per seed
-    from the stream 'mounting') to the given misalignment."""
+    from the stream 'mounting') to the given misalignment. lever_arm_survey_sigma_m > 0: the
+    filter is told a lever arm off the true one by a random constant per axis (config/given.py)."""
     lever_arm_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
     misalignment_arcmin: tuple[float, float, float] = (15.0, -10.0, -30.0)
     misalignment_random_arcmin: float = 0.0
