@@ -62,7 +62,9 @@ def _flat(sc) -> dict:
 
 # ---- what each node declares ------------------------------------------------------------
 
-FILTER_EXTRA = {'rate_hz', 'ship.lat_deg', 'ship.lon_deg', 'aircraft.lever_arm_m', 'aircraft.heading_on_deck_deg'}
+FILTER_EXTRA = {'rate_hz', 'ship.lat_deg', 'ship.lon_deg', 'aircraft.lever_arm_m', 'aircraft.heading_on_deck_deg',
+                'seed', 'aircraft.lever_arm_survey_sigma_m',     # these two: to draw the survey error
+                'ldv.mode'}                                      # the LDV installed: vector or beam
 
 
 def test_filter_node_declares_filter_and_what_a_user_knows(make_node):
@@ -71,7 +73,8 @@ def test_filter_node_declares_filter_and_what_a_user_knows(make_node):
     want = {f'filter.{f.name}' for f in dataclasses.fields(FilterConfig)} | FILTER_EXTRA
     assert keys == want
     # no simulation section: nothing of the ship's motion, the aircraft's truth or the sensors
-    assert not [k for k in keys if k.split('.')[0] in ('master', 'imu', 'ldv', 'doppler', 'seed', 'duration_s')]
+    assert not [k for k in keys if k.split('.')[0] in ('master', 'imu', 'ldv', 'doppler', 'duration_s')
+                and k not in FILTER_EXTRA]
     assert not [k for k in keys if k.startswith(('ship.', 'aircraft.')) and k not in FILTER_EXTRA]
 
 
@@ -144,6 +147,7 @@ def test_node_lever_arm_follows_as_with_set(make_node):
     {'aircraft.lever_arm_m': ARM},
     {'aircraft.heading_on_deck_deg': 2.0, 'aircraft.catapult.accel_g': 3.0},
     {'imu.preset': 'mems_store', 'master.preset': 'ship_medium', 'seed': 9},
+    {'aircraft.lever_arm_survey_sigma_m': 0.05, 'seed': 3},
     {'aircraft.lever_arm_m': ARM, 'ldv.origin_m': [0.0, 0.0, 0.0], 'doppler.enabled': True,
      'filter.model': 'seed001_13'},
 ])

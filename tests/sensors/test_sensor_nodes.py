@@ -100,3 +100,28 @@ def test_ldv_node_timing_dropouts_and_doppler(ros):
         assert h.t_ns == w.t_ns and h.valid
         np.testing.assert_allclose(h.v_b, w.v_b, rtol=0, atol=1e-12)
         assert h.sigma == pytest.approx(w.sigma, rel=1e-12)
+
+
+def test_master_node_jitter_stamps_as_the_stage(ros):
+    """With a transport jitter (master.latency_jitter_s) the node stamps each sample with the
+    stage's own draw: the same stamps, off the ship's sample grid, in order."""
+    sets = {**MASTER_SETS, 'master.latency_jitter_s': 0.008}
+    node, start = ros
+    sc = scenario.load('catapult', sets)
+    odom: list[Odometry] = []
+    pub = node.create_publisher(Odometry, topics.SHIP_ODOM, qos.STREAM)
+    node.create_subscription(Odometry, topics.MASTER_ODOM, odom.append, qos.STREAM)
+    start('master_ins_node', sets=sets)
+    spin_until(node, lambda: pub.get_subscription_count() >= 1)
+    time.sleep(1.0)
+    ships = pipeline.ship_samples(sc)[:101]
+    for s in ships:
+        pub.publish(convert.ship_to_msgs(s)[0])
+    stage = MasterInsStage(sc.master, sc.seed, sc.ship.lat_deg * DEG, sc.rate_hz, sc.t0_ns)
+    want = [o for s in ships for o in stage.step(convert.msgs_to_ship(convert.ship_to_msgs(s)[0]))]
+    assert 47 <= len(want) <= 49
+    spin_until(node, lambda: len(odom) == len(want))
+    stamps = [convert.msg_to_master(m).t_ns for m in odom]
+    assert stamps == [w.t_ns for w in want]
+    assert all(b > a for a, b in zip(stamps, stamps[1:]))
+    assert any((t - sc.t0_ns) % 10_000_000 for t in stamps)

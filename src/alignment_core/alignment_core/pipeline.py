@@ -113,7 +113,7 @@ def simulate(sc: Scenario) -> Inputs:
     truth, imu = slave.run_batch(ships)
     masters = MasterInsStage(sc.master, sc.seed, sc.ship.lat_deg * DEG, sc.rate_hz, sc.t0_ns).run_batch(ships)
     ldv = LdvStage(sc.ldv, sc.seed, plane_of(sc), sc.rate_hz, sc.t0_ns).run_batch(
-        ships, truth['p_w'], truth['q_nb'], truth['v_b'])
+        ships, truth['p_w'], truth['q_nb'], truth['v_b'], truth['w_b'])
     doppler = None
     if sc.doppler.enabled:
         doppler = DopplerStage(sc.doppler, sc.seed, sc.rate_hz, sc.t0_ns).run_batch(ships.t_ns, truth['v_b'])

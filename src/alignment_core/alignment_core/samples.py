@@ -54,11 +54,14 @@ class MasterSample:
 @dataclass(frozen=True, slots=True)
 class LdvSample:
     """Aircraft velocity relative to the deck, in ship axes (/ldv/twist); `valid` is False when
-    the aircraft is out of the LDV's range (published with covariance[0] = -1)."""
+    the aircraft is out of the LDV's range (published with covariance[0] = -1). A beam LDV
+    (`beam`: its unit line of sight, ship axes) measures only the component along it: v_s is
+    that component times `beam`, sigma its noise (sensors/ldv_beam.py)."""
     t_ns: int
     v_s: np.ndarray
     sigma: float
     valid: bool
+    beam: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -160,6 +160,7 @@ class AlignmentFilterNode(node_util.CountingNode):
             'rejected_nonfinite': c.rejected_nonfinite, 'rejected_out_of_order': c.rejected_out_of_order,
             'rejected_quaternion': c.rejected_quaternion, 'rejected_range': c.rejected_range,
             'rejected_future_stamp': c.rejected_future_stamp, 'rejected_frame_id': self.inputs.rejected_frame_id,
+            'rejected_ldv_mode': c.rejected_ldv_mode,
             'quaternion_normalised': c.quaternion_normalised, 'launch_not_felt': c.launch_not_felt,
             'imu_gaps': c.imu_gaps, 'bridged_gaps': c.bridged_gaps, 'gate_released': c.gate_released,
             'imu': c.imu, 'master': c.master, 'ldv': c.ldv, 'doppler': c.doppler,

@@ -49,7 +49,9 @@ NODE_SCOPES: dict[str, Scope] = {
     # the deck spot and the catapult give the LDV's origin, heading and track length by default
     'ldv_node': Scope((*TIMING, *ORIGIN, *DECK_SPOT, 'aircraft.catapult', 'ldv', 'doppler')),
     # what a user knows: the IMU rate, the origin, the surveyed deck spot; no simulation section
-    'alignment_filter_node': Scope(('rate_hz', *ORIGIN, *DECK_SPOT, 'filter')),
+    # (the seed and the survey sigma only to draw the survey error: config/given.py; the LDV's kind)
+    'alignment_filter_node': Scope(('rate_hz', *ORIGIN, *DECK_SPOT, 'seed', 'aircraft.lever_arm_survey_sigma_m',
+                                    'ldv.mode', 'filter')),
     'air_data_node': Scope((*TIMING, *ORIGIN, 'fads')),
     # the installed sensor's known calibration (port geometry, eps(M)) and the IMU rate; never
     # the sensor's noise truth or faults

@@ -78,10 +78,12 @@ class AircraftConfig:
     (x fwd/roll, y left, z up/yaw). heading_on_deck_deg: the aircraft's (and the catapult
     track's) nominal heading from the ship's bow, clockwise (0: a bow catapult).
     misalignment_random_arcmin > 0 adds a random constant per axis (1-sigma, drawn once per seed
-    from the stream 'mounting') to the given misalignment."""
+    from the stream 'mounting') to the given misalignment. lever_arm_survey_sigma_m > 0: the
+    filter is told a lever arm off the true one by a random constant per axis (config/given.py)."""
     lever_arm_m: tuple[float, float, float] = (40.0, -10.0, 15.0)
     misalignment_arcmin: tuple[float, float, float] = (15.0, -10.0, -30.0)
     misalignment_random_arcmin: float = 0.0
+    lever_arm_survey_sigma_m: float = 0.0   # 1-sigma survey error of filter.lever_arm_m (config/given.py)
     heading_on_deck_deg: float = 0.0
     catapult: CatapultConfig = field(default_factory=CatapultConfig)
     vibration: VibrationConfig = field(default_factory=VibrationConfig)
@@ -99,6 +101,8 @@ class AircraftConfig:
                 f"misalignment_random_arcmin must be in [0, 120], got {self.misalignment_random_arcmin}")
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
                 f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
+        require(0.0 <= self.lever_arm_survey_sigma_m <= 10.0,
+                f"lever_arm_survey_sigma_m must be in [0, 10] m, got {self.lever_arm_survey_sigma_m}")
         require(self.flight.start == 'deck' or not self.catapult.enabled,
                 "flight.start airborne has no deck phase: set catapult.enabled false")
 

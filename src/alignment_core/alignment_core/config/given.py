@@ -11,6 +11,7 @@ from typing import Any
 
 from alignment_core.aircraft.catapult import track_length_from_dict
 from alignment_core.estimation import presets as filter_presets
+from alignment_core.rng import stage_rng
 from alignment_core.sensors import presets as sensor_presets
 from alignment_core.validation import ConfigError
 
@@ -78,8 +79,36 @@ FOLLOWS = {
     'filter.heading_on_deck_deg': 'aircraft.heading_on_deck_deg',   # the nominal mounting on deck
     'ldv.track_heading_deg': 'aircraft.heading_on_deck_deg',        # the beam along the track
     'ldv.track_length_m': 'aircraft.catapult',       # hold-back creep + stroke + LDV_TRACK_MARGIN_M
+    'filter.ldv_mode': 'ldv.mode',                   # the LDV installed: vector or beam
 }
 """Key not given -> the given key (or section) its value follows (see `fill_defaults`)."""
+
+SURVEY_SIGMA_KEY = 'aircraft.lever_arm_survey_sigma_m'
+DEFAULT_LEVER_ARM_M = (40.0, -10.0, 15.0)
+"""AircraftConfig's and FilterConfig's default lever arm (the survey error applies to it when
+aircraft.lever_arm_m is not given)."""
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def surveyed_lever_arm(data: dict, default_seed: int) -> list[float] | None:
+    """The filter's lever arm when filter.lever_arm_m is not given and the survey error is on:
+    aircraft.lever_arm_m (the true spot) plus a random constant per axis of 1-sigma
+    aircraft.lever_arm_survey_sigma_m, drawn once per seed (stream 'lever_arm_survey'). None when
+    the error is off (0, the default) or a value is malformed (validation then names it)."""
+    sigma = _lookup(data, SURVEY_SIGMA_KEY)[1]
+    if not _number(sigma) or sigma <= 0.0:
+        return None
+    found, arm = _lookup(data, 'aircraft.lever_arm_m')
+    arm = arm if found else DEFAULT_LEVER_ARM_M
+    seed = data.get('seed', default_seed)
+    if not (isinstance(arm, (list, tuple)) and len(arm) == 3 and all(_number(a) for a in arm)
+            and isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
+        return None
+    err = stage_rng(seed, 'lever_arm_survey').standard_normal(3) * float(sigma)
+    return [float(a) + float(e) for a, e in zip(arm, err)]
 
 
 def _lookup(data: dict, key: str) -> tuple[bool, Any]:
@@ -91,16 +120,24 @@ def _lookup(data: dict, key: str) -> tuple[bool, Any]:
     return True, cur
 
 
-def fill_defaults(data: dict) -> dict:
+def fill_defaults(data: dict, default_seed: int = 1) -> dict:
     """Fill, in place, the keys the given ones imply (an explicit key always wins): each
     sensor preset (imu.preset, master.preset) and the filter preset (filter.preset) its
     section's keys, then the keys of FOLLOWS from theirs; ldv.track_length_m follows the
-    catapult whenever it is enabled (its default). Returns data."""
+    catapult whenever it is enabled (its default);
+    filter.lever_arm_m is the surveyed spot, off the true one by the survey error when
+    aircraft.lever_arm_survey_sigma_m > 0 (`surveyed_lever_arm`; default_seed: the scenario's
+    seed when none is given). Returns data."""
     sensor_presets.apply(data)
     filter_presets.apply(data)
     for key, source in FOLLOWS.items():
         if _lookup(data, key)[0]:
             continue
+        if key == 'filter.lever_arm_m':
+            surveyed = surveyed_lever_arm(data, default_seed)
+            if surveyed is not None:
+                set_dotted(data, key, surveyed)
+                continue
         if key == 'ldv.track_length_m':
             cat = _lookup(data, source)[1] or {}
             if isinstance(cat, dict) and cat.get('enabled', True):

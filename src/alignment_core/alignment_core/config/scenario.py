@@ -74,6 +74,11 @@ class Scenario:
             check_catapult_grid(self.aircraft.catapult, self.rate_hz)
         if given('master.rate_hz', 'rate_hz'):
             check_rate('master.rate_hz', self.master.rate_hz, self.rate_hz)
+        if self.master.latency_jitter_s > 0.0 and given('master.rate_hz', 'rate_hz', 'master.latency_jitter_s'):
+            interval = 1.0 / (self.master.rate_hz if self.master.rate_hz > 0.0 else self.rate_hz)
+            require(self.master.latency_jitter_s < interval,
+                    f"master.latency_jitter_s = {self.master.latency_jitter_s} s must be below the master's sample "
+                    f"interval {interval} s (its stamps must stay in order)")
         if given('ldv.rate_hz', 'rate_hz'):
             check_rate('ldv.rate_hz', self.ldv.rate_hz, self.rate_hz)
         if self.doppler.enabled and given('doppler.rate_hz', 'rate_hz'):
@@ -149,7 +154,7 @@ def resolve(given: dict | None, overrides: dict[str, object] | None = None,
     defaulting rules fill the keys not given (given.fill_defaults), then it is validated.
     With a scope (a node's keys), keys outside it are dropped after the rules, so they keep
     their defaults, and only the checks the scope allows run (Scenario.validate)."""
-    data = fill_defaults(with_overrides(given, overrides))
+    data = fill_defaults(with_overrides(given, overrides), default_seed=Scenario.seed)
     if scope is None:
         return build(Scenario, data)
     return _build_within(within(data, scope), scope)

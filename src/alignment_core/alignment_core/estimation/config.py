@@ -13,6 +13,7 @@ LINEAR_ALGORITHMS = ('kf', 'stf', 'stf_multiple', 'fading', 'fading_tested', 'ca
 NONLINEAR_ALGORITHMS = ('ekf', 'ukf', 'ckf')
 ATTITUDE_MODELS = ('seed003_21', 'seed003_24')               # attitude-match rows and mounting states
 RATE_MODELS = ('vm12', 'vm15', 'seed003_21', 'seed003_24')   # phi and eps states: rate matching
+BEAM_MODELS = ('vm12', 'vm15', 'seed000_6', 'seed003_21', 'seed003_24')   # linear, three velocity rows first
 
 
 @dataclass(frozen=True)
@@ -108,6 +109,7 @@ class FilterConfig:
     whiteness_window_updates: int = 500       # innovation whiteness (estimation/whiteness.py)
     whiteness_lags: int = 10                  # ... Ljung-Box lags
     whiteness_p: float = 1e-3                 # ... a window whose p-value is below this fails
+    ldv_mode: Literal['vector', 'beam'] = 'vector'   # the LDV installed (follows ldv.mode): beam = one row along it
 
     def validate(self) -> None:
         for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
@@ -147,6 +149,7 @@ class FilterConfig:
                 f"{self.flexure_tau_s}")
         self.validate_combination()
         self.validate_estimator_options()
+        self.validate_ldv_mode()
 
     def validate_estimator_options(self) -> None:
         """Relative velocity, preset, flexure states, whiteness (docs/engine.md)."""
@@ -166,6 +169,14 @@ class FilterConfig:
         require(1 <= self.whiteness_lags < self.whiteness_window_updates // 2,
                 f"whiteness_lags must be in [1, window / 2), got {self.whiteness_lags}")
         require(0.0 < self.whiteness_p < 0.5, f"whiteness_p must be in (0, 0.5), got {self.whiteness_p}")
+
+    def validate_ldv_mode(self) -> None:
+        """A beam LDV's one row projects the three velocity rows on the line of sight
+        (models/beam.py): a linear model whose first three rows are E, N, U velocity."""
+        require(self.ldv_mode in ('vector', 'beam'), f"ldv_mode must be 'vector' or 'beam', got {self.ldv_mode!r}")
+        require(self.ldv_mode == 'vector' or self.model in BEAM_MODELS,
+                f"ldv_mode beam projects the three velocity rows on the beam: it needs one of "
+                f"{', '.join(BEAM_MODELS)}, got {self.model}")
 
     def validate_monitoring(self) -> None:
         """Plausibility limits, gap handling, the gate and the consistency monitor."""

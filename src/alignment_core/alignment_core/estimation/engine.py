@@ -5,6 +5,7 @@ the filter algorithm (`filter.algorithm`) are chosen at run time; the default (v
 from __future__ import annotations
 
 from collections import deque
+from dataclasses import replace
 from typing import cast
 
 import numpy as np
@@ -27,6 +28,7 @@ from alignment_core.estimation.launch_detection import LaunchDetector, LaunchThr
 from alignment_core.estimation.matching import LiveSolution, Matcher, Reference
 from alignment_core.estimation.models import Propagation, make_model
 from alignment_core.estimation.models.base import DV
+from alignment_core.estimation.models.beam import track_velocity
 from alignment_core.estimation.outputs import Counters, Estimate
 from alignment_core.estimation.plausibility import InputGate
 from alignment_core.estimation.publication import EstimateMaker, OdometryMaker, PublishGuard, prior_estimate
@@ -315,14 +317,18 @@ class TransferAlignment(EngineViews):
             live.kf.P = live.kf.P + self._q_launch * late
 
     def _record_ldv(self, s: LdvSample) -> None:
-        """Integrate the deck displacement (when moving) and keep the sample by validity time."""
+        """Integrate the deck displacement (when moving) and keep the sample by validity time; a
+        beam sample, once moving, as the run along the track it implies (models/beam.py)."""
         t = s.t_ns
         moving = self._launch.moving
+        if moving and s.valid and s.beam is not None:
+            s = replace(s, v_s=track_velocity(s.v_s, s.beam, self._cfg.heading_on_deck_deg * DEG))
         prev = self._last_ldv
         if moving and s.valid and prev is not None and prev.valid:
             self._deck_disp = self._deck_disp + 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
         self._last_ldv = s
-        self._ldv_history.record(LdvRecord(t - self._ldv_lat_ns, s.v_s, s.valid, moving, self._deck_disp))
+        self._ldv_history.record(LdvRecord(t - self._ldv_lat_ns, s.v_s, s.valid, moving, self._deck_disp,
+                                           beam=s.beam))
 
     def _on_doppler(self, t: int, s: DopplerSample) -> None:
         """Match the radar at its validity time (it is ordered after the IMU sample at t)."""

@@ -18,6 +18,7 @@ from alignment_core.estimation.filters.lowpass import ButterworthLowPass
 from alignment_core.estimation.health import check_health
 from alignment_core.estimation.models import Corrections, ErrorModel, Match, Measurement, Propagation
 from alignment_core.estimation.models.base import RateInputs
+from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.outputs import Counters
 from alignment_core.geometry.rotations import cross3, quat_conj, quat_mul, quat_to_dcm
 from alignment_core.navigation.history import LdvRecord, SlaveHistory
@@ -54,6 +55,7 @@ class Reference(NamedTuple):
     u_n: np.ndarray          # (3,) C_m (w_m x r + v_rel)
     v_ref: np.ndarray        # (3,) master velocity + u_n
     moving: bool             # the LDV at the validity time says the aircraft moves
+    beam_n: np.ndarray | None = None   # (3,) a beam LDV's unit line of sight, nav frame (models/beam.py)
 
 
 @dataclass
@@ -74,6 +76,18 @@ class MatchResults:
     anchor: tuple[np.ndarray, np.ndarray] | None = None    # (C_m (3, 3), slave q_nb (4,))
     innovation: np.ndarray | None = None   # the last accepted master update's innovation and its
     innovation_cov: np.ndarray | None = None   # covariance S (innovation whiteness)
+
+
+def _interval_containing(intervals: deque[tuple[int, float, np.ndarray, np.ndarray]], t_v: int
+                         ) -> tuple[int, float, np.ndarray, np.ndarray] | None:
+    """The IMU interval (t_end, h, gyro, dv_n) with t_end - h < t_v < t_end: the deck spot's
+    acceleration for a validity time between IMU samples (a master stamp with transport jitter)."""
+    for item in reversed(intervals):
+        if item[0] - item[1] * 1e9 < t_v < item[0]:
+            return item
+        if item[0] < t_v:
+            return None
+    return None
 
 
 class Matcher:
@@ -154,9 +168,11 @@ class Matcher:
         moving = ldv is not None and ldv.moving
         disp = ldv.disp if ldv is not None else deck_disp
         r = self._r0 + self.results.corr.dr + disp if surveyed else self._lever_arm(disp)
-        v_rel = ldv.v_s if (ldv is not None and ldv.valid and moving) else np.zeros(3)
+        beam = ldv.beam if ldv is not None and ldv.valid else None
+        # a beam LDV is the measurement parked too (its one row); a vector one only once moving
+        v_rel = ldv.v_s if (ldv is not None and ldv.valid and (moving or beam is not None)) else np.zeros(3)
         u_n = c_m @ (cross3(m.w_b, r) + v_rel)
-        return Reference(c_m, r, v_rel, u_n, c_m @ m.v_b + u_n, moving)
+        return Reference(c_m, r, v_rel, u_n, c_m @ m.v_b + u_n, moving, None if beam is None else c_m @ beam)
 
     def _lever_arm(self, deck_disp: np.ndarray) -> np.ndarray:
         """The lever arm put into the reference (ship axes): the surveyed spot (plus the
@@ -184,8 +200,9 @@ class Matcher:
             if item[0] < t_v:
                 break
         a_n = None
-        if not ref.moving and iv is not None:
-            a_n = iv[3] / iv[1]
+        parked_iv = iv if iv is not None else _interval_containing(self._intervals, t_v)
+        if not ref.moving and parked_iv is not None:
+            a_n = parked_iv[3] / parked_iv[1]
         elif ref.moving and prev is not None and prev[0] < t_v:
             fixed = cross3(m.w_b, r) + v_rel
             a_n = (c_m @ (m.v_b + fixed) - prev[1] @ (prev[2] + cross3(prev[3], r) + v_rel)) / ((t_v - prev[0]) * 1e-9)
@@ -209,8 +226,9 @@ class Matcher:
         transitions in between, x(t_ins) = Phi x(t_v) (process noise over the latency neglected),
         so the measurement matrix is H Phi^-1 (identity at zero latency). The estimate is fed
         back into the live solution, and the same correction into the stored past ones."""
-        r_vel = self._r_moving if ref.moving else self._r_parked
-        if ref.moving:
+        uses_ldv = ref.moving or ref.beam_n is not None
+        r_vel = self._r_moving if uses_ldv else self._r_parked
+        if uses_ldv:
             # an LDV slower than the master enters several matches with the same noise:
             # weight it as one sample per LDV interval (variance times the matches per sample)
             ratio = ldv_spacing_ns / master_spacing_ns if master_spacing_ns else 1.0
@@ -227,6 +245,8 @@ class Matcher:
             match.w_n, match.a_n, match.rate = extras
         res = self.results
         meas = self._model.measurement(match, res.corr)
+        if ref.beam_n is not None:
+            meas = project_on_beam(meas, ref.beam_n)
         kf = live.kf
         gate = self._gate_now()
         res.dof = len(meas.z)

@@ -66,6 +66,7 @@ class Counters:
     gate_released: int = 0            # updates taken after gate_release_updates gated ones in a row
     consistency_failures: int = 0     # NIS windows above their chi-square bound
     ldv_ignored: int = 0              # LDV samples under relative velocity zero or after it fell silent
+    rejected_ldv_mode: int = 0        # LDV samples not of the kind filter.ldv_mode says (beam / vector)
 
 
 @dataclass(frozen=True)

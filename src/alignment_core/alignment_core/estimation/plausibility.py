@@ -17,7 +17,7 @@ from alignment_core.samples import DopplerSample, ImuSample, LdvSample, MasterSa
 from alignment_core.units import DEG, G0
 
 # reasons a sample is rejected (Counters.rejected_<reason>; the node adds 'frame_id')
-REASONS = ('nonfinite', 'out_of_order', 'quaternion', 'range', 'future_stamp')
+REASONS = ('nonfinite', 'out_of_order', 'quaternion', 'range', 'future_stamp', 'ldv_mode')
 UNIT_ROUNDING = 1e-12      # |norm - 1| below this is rounding: the quaternion is used as given
 
 
@@ -32,6 +32,7 @@ class Limits:
     position: float
     ldv_speed: float
     doppler_speed: float
+    ldv_beam: bool
     future_ns: int                   # lead over every other stream that makes a stamp the outlier
     silence_ns: int
 
@@ -41,7 +42,7 @@ class Limits:
         lead = cfg.future_stamp_s + max(cfg.master_latency_s, cfg.ldv_latency_s, cfg.doppler_latency_s)
         return cls(cfg.quaternion_norm_tolerance, cfg.imu_gyro_range_dps * DEG, cfg.imu_accel_range_g * G0,
                    cfg.master_speed_max_mps, cfg.master_rate_max_dps * DEG, cfg.position_max_m,
-                   cfg.ldv_speed_max_mps, cfg.doppler_speed_max_mps, int(round(lead * 1e9)),
+                   cfg.ldv_speed_max_mps, cfg.doppler_speed_max_mps, cfg.ldv_mode == 'beam', int(round(lead * 1e9)),
                    int(round(cfg.silence_warn_s * 1e9)))
 
 
@@ -81,11 +82,14 @@ def master_check(s: MasterSample, lim: Limits) -> tuple[MasterSample | None, str
 
 
 def ldv_reason(s: LdvSample, lim: Limits) -> str:
-    """A valid LDV sample must be finite and slower than the deck run allows."""
+    """A valid LDV sample must be finite and slower than the deck run allows, and of the LDV's
+    kind (filter.ldv_mode): a beam sample carries a unit line of sight, a vector one none."""
     if not s.valid:
         return ''
-    if not finite(s.v_s):
+    if not finite(s.v_s) or (s.beam is not None and not finite(s.beam)):
         return 'nonfinite'
+    if (s.beam is not None) != lim.ldv_beam or (s.beam is not None and abs(_norm(s.beam) - 1.0) > 1e-6):
+        return 'ldv_mode'
     return 'range' if _norm(s.v_s) > lim.ldv_speed else ''
 
 

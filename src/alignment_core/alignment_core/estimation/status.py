@@ -55,7 +55,7 @@ def with_lag(level: int, flags: tuple[str, ...], lag_ns: int, bridge_ns: int, er
 def input_trouble(c: Counters) -> bool:
     """Any sample rejected, any IMU gap, any master sample unmatched, any LDV run not felt."""
     return bool(c.rejected_nonfinite + c.rejected_out_of_order + c.rejected_quaternion + c.rejected_range
-                + c.rejected_future_stamp + c.imu_gaps + c.unmatched_master + c.launch_not_felt)
+                + c.rejected_future_stamp + c.rejected_ldv_mode + c.imu_gaps + c.unmatched_master + c.launch_not_felt)
 
 
 def failure(h: Health, monitor: NisMonitor) -> str:

@@ -137,6 +137,16 @@ class LdvRecord:
     moving: bool
     disp: np.ndarray
     var: float = 0.0
+    beam: np.ndarray | None = None      # a beam LDV's unit line of sight (ship axes)
+
+
+def _beam_between(a: LdvRecord, b: LdvRecord, f: float) -> np.ndarray | None:
+    """A beam LDV's line of sight at the fraction f between two samples (normalised linear
+    interpolation; None for a vector LDV)."""
+    if a.beam is None or b.beam is None:
+        return None
+    u = a.beam + f * (b.beam - a.beam)
+    return u / np.linalg.norm(u)
 
 
 class LdvHistory:
@@ -188,7 +198,7 @@ class LdvHistory:
         if a.valid and b.valid:
             v = a.v_s + f * (b.v_s - a.v_s)
             disp = a.disp + 0.5 * (a.v_s + v) * ((t_ns - a.t_ns) * 1e-9) if b.moving else a.disp
-            return LdvRecord(t_ns, v, True, b.moving, disp, self._kink_variance(k, f))
+            return LdvRecord(t_ns, v, True, b.moving, disp, self._kink_variance(k, f), _beam_between(a, b, f))
         if not (a.moving or b.moving):
             for near in ((a, b) if f <= 0.5 else (b, a)):
                 if near.valid and abs(near.t_ns - t_ns) * 2 <= span:

@@ -9,10 +9,16 @@ starts at rate dropout_rate_hz (per second of valid time), exponential durations
 dropout_mean_s; fraction of time in dropout p = r d / (1 + r d); stepped exactly between
 samples (stream 'ldv_dropout', stationary start). Own rate and latency: sensors/timing.py.
 Everything is off by default (today's numbers).
+
+`mode: beam` (sensors/ldv_beam.py): the range rate along the line of sight from a head on the
+deck to a reflector on the aircraft, s_meas = (1 + k) s + b + n (the first axis's k and b), with
+the geometric blockage of that module on top of the validity above; the sample carries
+s u (the velocity along the beam, ship axes) and the unit line of sight u (`LdvSample.beam`).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -21,6 +27,7 @@ from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import cross
 from alignment_core.rng import stage_rng
 from alignment_core.samples import AircraftTruth, LdvSample, ShipBatch, ShipSample
+from alignment_core.sensors.ldv_beam import line_of_sight, visible
 from alignment_core.sensors.timing import SensorTiming
 from alignment_core.validation import require
 
@@ -47,6 +54,13 @@ class LdvConfig:
     dropout_mean_s: float = 0.2
     rate_hz: float = 0.0               # 0 = the scenario rate; else a divisor of it
     latency_s: float = 0.0
+    # the beam (mode: beam, sensors/ldv_beam.py); vector: all three components (today)
+    mode: Literal['vector', 'beam'] = 'vector'
+    mount_m: tuple[float, float, float] = (100.0, -6.0, 16.0)      # the head on the deck, ship axes
+    reflector_m: tuple[float, float, float] = (0.0, 0.0, 0.0)      # on the aircraft, aircraft axes from the IMU
+    reflector_axis: tuple[float, float, float] = (1.0, 0.0, 0.0)   # the reflector faces this way (aircraft axes)
+    reflector_halfangle_deg: float = 45.0     # acceptance half-angle: beyond it the line is blocked
+    min_range_m: float = 1.0                  # the head nearer than this: blocked
 
     def validate(self) -> None:
         require(0.0 < self.noise_mps <= 10.0, f"noise_mps must be in (0, 10], got {self.noise_mps}")
@@ -65,6 +79,16 @@ class LdvConfig:
                 f"dropout_mean_s must be in (0, 3600], got {self.dropout_mean_s}")
         require(0.0 <= self.rate_hz <= 2000.0, f"rate_hz must be in [0, 2000], got {self.rate_hz}")
         require(0.0 <= self.latency_s <= 1.0, f"latency_s must be in [0, 1] s, got {self.latency_s}")
+        self.validate_beam()
+
+    def validate_beam(self) -> None:
+        require(self.mode in ('vector', 'beam'), f"mode must be 'vector' or 'beam', got {self.mode!r}")
+        require(float(np.linalg.norm(self.reflector_axis)) > 0.0, "reflector_axis must not be zero")
+        require(0.0 < self.reflector_halfangle_deg <= 90.0,
+                f"reflector_halfangle_deg must be in (0, 90], got {self.reflector_halfangle_deg}")
+        require(0.0 < self.min_range_m <= 1000.0, f"min_range_m must be in (0, 1000], got {self.min_range_m}")
+        for k in ('mount_m', 'reflector_m'):
+            require(float(np.max(np.abs(getattr(self, k)))) <= 1000.0, f"{k} must be within +-1000 m per axis")
 
 
 def dropout_transition(rate_hz: float, mean_s: float, h: float) -> tuple[float, float]:
@@ -100,7 +124,7 @@ class LdvModel:
             self.last_t: int | None = None
 
     def measure(self, s: ShipSample, a: AircraftTruth) -> LdvSample:
-        return self.measure_batch(ShipBatch.of([s]), a.p_w[None], a.q_nb[None], a.v_b[None])[0]
+        return self.measure_batch(ShipBatch.of([s]), a.p_w[None], a.q_nb[None], a.v_b[None], a.w_b[None])[0]
 
     def _dropout_batch(self, t_ns: np.ndarray) -> np.ndarray:
         """True where the LDV is in a dropout (K,); stepped sample by sample."""
@@ -119,11 +143,13 @@ class LdvModel:
             out[k] = self.in_dropout
         return out
 
-    def measure_batch(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray
-                      ) -> list[LdvSample]:
+    def measure_batch(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray,
+                      w_a_b: np.ndarray | None = None) -> list[LdvSample]:
         """K measurements from ship samples and aircraft truth (positions, attitudes, body
-        velocities, each (K, ...))."""
+        velocities, body rates w.r.t. nav (beam mode; None: rigid on the ship), each (K, ...))."""
         cfg = self.cfg
+        if cfg.mode == 'beam':
+            return self._beam_batch(sb, p_a, q_a, v_a_b, w_a_b)
         n = self.rng.standard_normal((len(sb), 3)) * cfg.noise_mps
         c_ns = Rotation.from_quat(sb.q_nb).inv()                           # C_n^s
         c_lw = np.swapaxes(self.plane.c_local_to_world(sb.p_w), -1, -2)  # world -> local ENU
@@ -151,6 +177,45 @@ class LdvModel:
         return [LdvSample(t_ns=int(sb.t_ns[k]), v_s=v_rel[k] if valid[k] else zero,
                           sigma=cfg.noise_mps, valid=bool(valid[k])) for k in range(len(sb))]
 
+    def _relative(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray
+                  ) -> tuple[Rotation, np.ndarray, np.ndarray, np.ndarray]:
+        """(C_n^s, IMU spots r (K, 3), their velocities relative to the deck (K, 3), validity on
+        the track (K,)), ship axes."""
+        cfg = self.cfg
+        c_ns = Rotation.from_quat(sb.q_nb).inv()
+        c_lw = np.swapaxes(self.plane.c_local_to_world(sb.p_w), -1, -2)
+        r = c_ns.apply(np.einsum('kij,kj->ki', c_lw, p_a - sb.p_w))
+        d = r - np.asarray(cfg.origin_m)
+        along = d @ self.track
+        across = np.linalg.norm(d - along[:, None] * self.track, axis=1)
+        valid = (along >= -cfg.beam_halfwidth_m) & (along <= cfg.track_length_m) & (across <= cfg.beam_halfwidth_m)
+        v_rel = c_ns.apply(Rotation.from_quat(q_a).apply(v_a_b) - Rotation.from_quat(sb.q_nb).apply(sb.v_b)) \
+            - cross(sb.w_b, r)
+        if cfg.max_range_m > 0.0:
+            valid &= np.linalg.norm(r - self.head, axis=1) <= cfg.max_range_m
+        return c_ns, r, v_rel, valid
+
+    def _beam_batch(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray,
+                    w_a_b: np.ndarray | None) -> list[LdvSample]:
+        """Beam mode (module docstring, sensors/ldv_beam.py)."""
+        cfg = self.cfg
+        n = self.rng.standard_normal(len(sb)) * cfg.noise_mps
+        c_ns, r, v_rel, valid = self._relative(sb, p_a, q_a, v_a_b)
+        u, rng, s, c_as = line_of_sight(c_ns, q_a, r, v_rel, sb.w_b, w_a_b, np.asarray(cfg.mount_m, dtype=float),
+                                        np.asarray(cfg.reflector_m, dtype=float))
+        valid &= visible(u, rng, c_as, np.asarray(cfg.reflector_axis, dtype=float),
+                         cfg.reflector_halfangle_deg * np.pi / 180.0, cfg.min_range_m)
+        if cfg.max_speed_mps > 0.0:
+            valid &= np.abs(s) <= cfg.max_speed_mps
+        if self.dropouts:
+            valid &= ~self._dropout_batch(sb.t_ns)
+        if self.has_errors:
+            s = s * (1.0 + self.scale[0]) + self.bias[0]
+        s = s + n
+        zero = np.zeros(3)
+        return [LdvSample(t_ns=int(sb.t_ns[k]), v_s=s[k] * u[k] if valid[k] else zero, sigma=cfg.noise_mps,
+                          valid=bool(valid[k]), beam=u[k] if valid[k] else None) for k in range(len(sb))]
+
 
 class LdvStage:
     """Ship samples + aircraft truth in -> LDV samples at its rate, stamped t + latency and
@@ -165,13 +230,15 @@ class LdvStage:
         lat = self.timing.latency_ns
         if not lat:
             return samples
-        return [LdvSample(t_ns=s.t_ns + lat, v_s=s.v_s, sigma=s.sigma, valid=s.valid) for s in samples]
+        return [LdvSample(t_ns=s.t_ns + lat, v_s=s.v_s, sigma=s.sigma, valid=s.valid, beam=s.beam) for s in samples]
 
     def step(self, s: ShipSample, a: AircraftTruth) -> list[LdvSample]:
         new = self._stamped([self.model.measure(s, a)]) if self.timing.due(s.t_ns) else []
         return self.timing.release(s.t_ns, new)
 
-    def run_batch(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray) -> list[LdvSample]:
+    def run_batch(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray,
+                  w_a_b: np.ndarray | None = None) -> list[LdvSample]:
         idx = np.flatnonzero(self.timing.due_mask(sb.t_ns))
-        out = self.model.measure_batch(sb.slice(idx), p_a[idx], q_a[idx], v_a_b[idx]) if len(idx) else []
+        w = None if w_a_b is None else w_a_b[idx]
+        out = self.model.measure_batch(sb.slice(idx), p_a[idx], q_a[idx], v_a_b[idx], w) if len(idx) else []
         return self.timing.release_batch(self._stamped(out), int(sb.t_ns[-1]))

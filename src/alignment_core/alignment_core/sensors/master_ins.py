@@ -30,7 +30,8 @@ error does not enter transfer alignment). Two models (`master.model`):
   by the augmented expm, process noise by Van Loan (stream stage_rng(seed, 'master_ins_process')).
 
 Both models add white velocity noise and the gyro bias on the body rate (stream 'master_ins').
-Output rate and latency: sensors/timing.py (`rate_hz`, 0 = scenario rate; `latency_s`).
+Output rate and latency: sensors/timing.py (`rate_hz`, 0 = scenario rate; `latency_s`; a
+transport jitter `latency_jitter_s`, uniform per sample, stream 'master_ins_jitter').
 """
 from __future__ import annotations
 
@@ -69,6 +70,7 @@ class MasterConfig:
     vrw_ugpshz: float = 0.0
     rate_hz: float = 0.0               # 0 = the scenario rate; else a divisor of it
     latency_s: float = 0.0             # data valid at t are stamped (and arrive at) t + latency
+    latency_jitter_s: float = 0.0      # + a uniform random delay in [0, jitter) per sample (timing.py)
     noise_change_at_s: float = 0.0     # 0 = never; from then on velocity noise x noise_change_factor
     noise_change_factor: float = 1.0   # (seed 003's model-error case: variance x 50 after 100 s)
 
@@ -88,6 +90,8 @@ class MasterConfig:
                 "state); use initial: aligned")
         require(0.0 <= self.rate_hz <= 2000.0, f"rate_hz must be in [0, 2000], got {self.rate_hz}")
         require(0.0 <= self.latency_s <= 1.0, f"latency_s must be in [0, 1] s, got {self.latency_s}")
+        require(0.0 <= self.latency_jitter_s <= 1.0,
+                f"latency_jitter_s must be in [0, 1] s, got {self.latency_jitter_s}")
         require(self.noise_change_at_s >= 0.0,
                 f"noise_change_at_s must be >= 0 (0 = never), got {self.noise_change_at_s}")
         require(0.0 <= self.noise_change_factor <= 1000.0,
@@ -262,13 +266,19 @@ class MasterInsStage:
 
     def __init__(self, cfg: MasterConfig, seed: int, lat: float, base_rate_hz: float, t0_ns: int) -> None:
         self.model = MasterInsModel(cfg, seed, lat, t0_ns)
-        self.timing = SensorTiming(cfg.rate_hz, cfg.latency_s, base_rate_hz, t0_ns)
+        jitter = stage_rng(seed, 'master_ins_jitter') if cfg.latency_jitter_s > 0.0 else None
+        self.timing = SensorTiming(cfg.rate_hz, cfg.latency_s, base_rate_hz, t0_ns, cfg.latency_jitter_s, jitter)
 
     def _outputs(self, sb: ShipBatch) -> list[MasterOutput]:
         ms = self.model.measure_batch(sb)
-        lat = self.timing.latency_ns
-        return [MasterOutput(MasterSample(t_ns=m.t_ns + lat, p_w=m.p_w, q_nb=m.q_nb, v_b=m.v_b, w_b=m.w_b)
-                             if lat else m, self.model.last_phi[k], self.model.last_dv[k])
+        if not self.timing.jitter_ns:
+            lat = self.timing.latency_ns
+            return [MasterOutput(MasterSample(t_ns=m.t_ns + lat, p_w=m.p_w, q_nb=m.q_nb, v_b=m.v_b, w_b=m.w_b)
+                                 if lat else m, self.model.last_phi[k], self.model.last_dv[k])
+                    for k, m in enumerate(ms)]
+        delays = self.timing.delays_ns(len(ms))
+        return [MasterOutput(MasterSample(t_ns=m.t_ns + int(delays[k]), p_w=m.p_w, q_nb=m.q_nb, v_b=m.v_b,
+                                          w_b=m.w_b), self.model.last_phi[k], self.model.last_dv[k])
                 for k, m in enumerate(ms)]
 
     def step(self, s: ShipSample) -> list[MasterOutput]:

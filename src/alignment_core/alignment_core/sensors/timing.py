@@ -5,8 +5,12 @@ measures at the ship samples k = 0, d, 2d, ... (d = scenario rate / sensor rate)
 valid at time t are stamped t + latency and released (published) once simulation time has
 reached that stamp; data whose stamp falls after the last ship sample are never released.
 This is what a filter's delay state must estimate: the stamp is the arrival time, the data
-are `latency` older. The node (one sample at a time) and the batch pipeline (all at once)
-apply the same rule, so both release the same samples with the same stamps.
+are `latency` older. With a transport jitter J > 0 each sample's delay is latency + U(0, J),
+a uniform draw per measured sample (one random stream per sensor), rounded to the nanosecond;
+J must be below the sensor's sample interval, so the stamps stay strictly increasing and the
+samples arrive in order (mean delay latency + J/2, standard deviation J/sqrt(12)).
+The node (one sample at a time) and the batch pipeline (all at once) apply the same rule,
+so both release the same samples with the same stamps.
 """
 from __future__ import annotations
 
@@ -38,12 +42,28 @@ def check_rate(name: str, sensor_rate_hz: float, base_rate_hz: float) -> None:
 class SensorTiming:
     """Which ship samples a sensor measures at, and when its samples are released."""
 
-    def __init__(self, rate_hz: float, latency_s: float, base_rate_hz: float, t0_ns: int) -> None:
+    def __init__(self, rate_hz: float, latency_s: float, base_rate_hz: float, t0_ns: int,
+                 jitter_s: float = 0.0, jitter_rng: np.random.Generator | None = None) -> None:
         self.every = decimation(rate_hz, base_rate_hz)
         self.base_dt_ns = int(round(1e9 / base_rate_hz))
         self.t0_ns = t0_ns
         self.latency_ns = int(round(latency_s * 1e9))
         self.pending: deque[Any] = deque()
+        self.jitter_ns = int(round(jitter_s * 1e9))
+        require(self.jitter_ns == 0 or jitter_rng is not None, 'a transport jitter needs its random stream')
+        require(self.jitter_ns < self.every * self.base_dt_ns,
+                f"latency jitter {jitter_s} s must be below the sample interval "
+                f"{self.every * self.base_dt_ns * 1e-9} s (stamps must stay in order)")
+        self.jitter_rng = jitter_rng
+
+    def delays_ns(self, n: int) -> np.ndarray:
+        """Delays (ns, int64) of the next n measured samples: the latency plus, with a jitter, a
+        uniform draw in [0, jitter) each (module docstring); the same numbers one at a time or
+        all at once."""
+        if not self.jitter_ns:
+            return np.full(n, self.latency_ns, dtype=np.int64)
+        assert self.jitter_rng is not None
+        return self.latency_ns + np.round(self.jitter_rng.random(n) * self.jitter_ns).astype(np.int64)
 
     def due(self, t_ns: int) -> bool:
         """True if the sensor measures at the ship sample stamped t_ns."""

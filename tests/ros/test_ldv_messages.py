@@ -1,0 +1,48 @@
+"""/ldv/twist both ways (alignment_ros.convert): a vector LDV's sample as sigma^2 I, a beam's as
+s u with the rank-1 covariance sigma^2 u u^T; the filter side reads the kind, the line of sight
+(up to its sign, immaterial for a projection) and sigma back; covariance[0] = -1 is no
+measurement."""
+from __future__ import annotations
+
+import numpy as np
+
+from alignment_core.samples import LdvSample
+from alignment_ros import convert
+
+
+def test_vector_sample_round_trip_is_todays():
+    s = LdvSample(t_ns=1_230_000_000, v_s=np.array([0.3, -0.2, 0.01]), sigma=0.01, valid=True)
+    m = convert.ldv_to_msg(s)
+    cov = np.array(m.twist.covariance).reshape(6, 6)
+    np.testing.assert_array_equal(cov[:3, :3], 1e-4 * np.eye(3))
+    back = convert.msg_to_ldv(m)
+    assert back.beam is None and back.valid and back.t_ns == s.t_ns
+    np.testing.assert_array_equal(back.v_s, s.v_s)
+    assert back.sigma == 0.01
+
+
+def test_beam_sample_carries_its_line_of_sight_in_a_rank_one_covariance():
+    u = np.array([-0.97, -0.2, -0.1])
+    u /= np.linalg.norm(u)
+    s = LdvSample(t_ns=5, v_s=-12.5 * u, sigma=0.02, valid=True, beam=u)
+    m = convert.ldv_to_msg(s)
+    cov = np.array(m.twist.covariance).reshape(6, 6)[:3, :3]
+    assert np.linalg.matrix_rank(cov, tol=1e-12) == 1
+    np.testing.assert_allclose(cov, 4e-4 * np.outer(u, u), rtol=0, atol=1e-18)
+    back = convert.msg_to_ldv(m)
+    assert back.valid and back.beam is not None
+    assert abs(abs(float(back.beam @ u)) - 1.0) < 1e-12
+    np.testing.assert_allclose(float(back.v_s @ back.beam) * back.beam, s.v_s, rtol=0, atol=1e-12)
+    assert abs(back.sigma - 0.02) < 1e-15
+    # a beam along an axis: still rank 1
+    ax = LdvSample(t_ns=6, v_s=np.array([0.0, 0.0, 0.0]), sigma=0.01, valid=True, beam=np.array([0.0, 1.0, 0.0]))
+    b2 = convert.msg_to_ldv(convert.ldv_to_msg(ax))
+    assert b2.beam is not None and abs(abs(b2.beam[1]) - 1.0) < 1e-15
+
+
+def test_invalid_sample_is_no_measurement_of_either_kind():
+    s = LdvSample(t_ns=7, v_s=np.zeros(3), sigma=0.01, valid=False)
+    m = convert.ldv_to_msg(s)
+    assert m.twist.covariance[0] == -1.0
+    back = convert.msg_to_ldv(m)
+    assert not back.valid and back.beam is None
