@@ -56,6 +56,7 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from alignment_ros.bag import BagError, BagWriter, stamp_reader
+from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.record_options import TopicFilter, parse_args
 from alignment_ros.topics import CLOCK, msg_class
@@ -287,8 +288,8 @@ def make_executor(kind: str) -> Any:
     return SingleThreadedExecutor()
 
 
-def _loop(args: argparse.Namespace, rec: Recorder, executor: Any,
-          stop: dict[str, bool]) -> tuple[str, dict[str, int] | None]:
+def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str, bool],
+          progress: Progress) -> tuple[str, dict[str, int] | None]:
     """Spin until an end condition; return (end reason, expected counts)."""
     interval = max(args.polling_interval, 1) / 1000.0
     discovering = not args.no_discovery and (args.filter.discovers() or rec.pending_topics())
@@ -309,6 +310,7 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any,
         if now >= next_publishers:
             rec.note_publishers()
             next_publishers = now + PUBLISHERS_INTERVAL_S
+            _progress(rec, progress, args.progress_lines)
         if discovering and now >= next_poll:
             rec.discover()
             discovering = args.filter.discovers() or bool(rec.pending_topics())
@@ -336,6 +338,14 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any,
             return 'idle_timeout', expected
 
 
+def _progress(rec: Recorder, progress: Progress, lines: bool) -> None:
+    """The progress line (stderr) and, for a launcher, 'recorder progress MESSAGES STAMP_NS'."""
+    t_ns, total = max(rec.clock_ns or 0, rec.max_stamp_ns), sum(rec.counts.values())
+    progress.update(t_ns / NS if t_ns else None, messages=total)
+    if lines:
+        print(f'recorder progress {total} {t_ns}', flush=True)
+
+
 def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     """Record until an end condition; return the stats dict."""
     writer = BagWriter(args.output, max_bag_duration_s=args.max_bag_duration,
@@ -355,7 +365,10 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         executor.add_node(node)
         rec.discover()
         print('recorder ready', flush=True)
-        reason, expected = _loop(args, rec, executor, stop)
+        progress = Progress('record', None, quiet=args.quiet)
+        reason, expected = _loop(args, rec, executor, stop, progress)
+        t_ns = max(rec.clock_ns or 0, rec.max_stamp_ns)
+        progress.close(t_ns / NS if t_ns else None, sum(rec.counts.values()))
     finally:
         if rec is not None:
             rec.finish_endpoints()
