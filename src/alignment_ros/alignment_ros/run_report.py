@@ -5,6 +5,7 @@ summary.json), the last estimate the bag holds (with or without truth), the diag
 run_graph.sh and replay.sh after every run, and by plot_bag.sh for any bag."""
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -124,7 +125,7 @@ def markdown(title: str, s: dict | None, series: RunSeries, drawn: list[tuple[st
         lines += [*est, '']
     lines += ['## Diagnostics', '', *diagnostics_lines(series), '## Plots', '']
     for t, p in drawn:
-        lines += [f'### {t}', '', f'![{t}]({p.relative_to(base).as_posix()})', '']
+        lines += [f'### {t}', '', f'![{t}]({Path(os.path.relpath(p, base)).as_posix()})', '']
     return '\n'.join(lines)
 
 
@@ -144,6 +145,7 @@ def build(bags: list[Path], out: Path, s: dict | None, title: str, topics=None,
     series.scenario = scenario_next_to(*bags)
     drawn = plots.draw(series, out)
     path = Path(report_dir) / 'report.md'
+    path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(markdown(title, s, series, drawn, Path(report_dir)) + '\n')
     return path
 

@@ -91,6 +91,12 @@ def _rows(state: Labelled) -> tuple[str | None, str | None]:
     return value, 'sigma' if 'sigma' in state.rows else None
 
 
+def _short(label: str, group: str) -> str:
+    """A state's name within its panel: its axis ('eps_x' in 'eps': 'x')."""
+    rest = label[len(group):].lstrip('_') if label.startswith(group) else label
+    return rest.split('_')[0] or label
+
+
 def states(s: RunSeries, path: Path) -> Path | None:
     st = s.state
     if st is None or not len(st.t_s):
@@ -111,7 +117,7 @@ def states(s: RunSeries, path: Path) -> Path | None:
         for j, i in enumerate(groups[name]):
             c = f'C{j}'
             v = st.rows[value_row][:, i] * factor if value_row else np.zeros_like(t)
-            ax.plot(t, v, color=c, lw=1.0, label=st.labels[i])
+            ax.plot(t, v, color=c, lw=1.0, label=_short(st.labels[i], name) if len(groups[name]) > 1 else None)
             vals.append(v)
             if sigma_row:
                 sg = st.rows[sigma_row][:, i] * factor
@@ -121,7 +127,8 @@ def states(s: RunSeries, path: Path) -> Path | None:
         if lim:
             ax.set_ylim(*lim)
         ax.set_ylabel(f'{name} ({unit})' if unit else name)
-        ax.legend(loc='upper right', ncol=len(groups[name]), fontsize=7)
+        if len(groups[name]) > 1:
+            ax.legend(loc='best', ncol=len(groups[name]), fontsize=7)
     for n in range(len(names), rows * cols):
         axs[n // cols, n % cols].set_visible(False)
     what = 'value' if value_row is None else value_row
