@@ -86,7 +86,7 @@ def _panel_windows(ax, d: Diagnostic, window: int, dof: int | None) -> None:
         ax.axhspan(lo, hi, color='tab:green', alpha=0.12, label=f'95 % band, χ²({n}) / {n}')
     ax.axhline(1.0, color='grey', lw=0.6)
     ax.set_ylabel('NIS / dof (-)')
-    ax.legend(loc='best', ncol=3)
+    ax.legend(loc='lower left', bbox_to_anchor=(0.0, 1.0), ncol=3, frameon=False)
 
 
 def _levels(ax, d: Diagnostic) -> None:
