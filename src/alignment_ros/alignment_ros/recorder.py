@@ -67,6 +67,7 @@ NS = 1_000_000_000
 SPIN_TIMEOUT_S = 0.05
 FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed recorder keeps)
 PUBLISHERS_INTERVAL_S = 1.0  # the recorded topics' publishers are looked up this often
+WALL_STAMPED = ('/rosout', '/parameter_events')   # rcl stamps these with the wall clock
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # rmw's name of a node not yet discovered
 
 
@@ -338,9 +339,17 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str
             return 'idle_timeout', expected
 
 
+def _reached_ns(rec: Recorder) -> int:
+    if rec.clock_ns is not None:
+        return rec.clock_ns
+    return max((t for k, t in rec.last_stamp_ns.items() if k not in WALL_STAMPED), default=0)
+
+
 def _progress(rec: Recorder, progress: Progress, lines: bool) -> None:
-    """The progress line (stderr) and, for a launcher, 'recorder progress MESSAGES STAMP_NS'."""
-    t_ns, total = max(rec.clock_ns or 0, rec.max_stamp_ns), sum(rec.counts.values())
+    """The progress line (stderr) and, for a launcher, 'recorder progress MESSAGES STAMP_NS': the
+    time reached is /clock's when recorded, else the latest log time of a topic not stamped with
+    the wall clock by rcl itself (/rosout, /parameter_events)."""
+    t_ns, total = _reached_ns(rec), sum(rec.counts.values())
     progress.update(t_ns / NS if t_ns else None, messages=total)
     if lines:
         print(f'recorder progress {total} {t_ns}', flush=True)
@@ -367,7 +376,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         print('recorder ready', flush=True)
         progress = Progress('record', None, quiet=args.quiet)
         reason, expected = _loop(args, rec, executor, stop, progress)
-        t_ns = max(rec.clock_ns or 0, rec.max_stamp_ns)
+        t_ns = _reached_ns(rec)
         progress.close(t_ns / NS if t_ns else None, sum(rec.counts.values()))
     finally:
         if rec is not None:
