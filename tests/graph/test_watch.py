@@ -180,6 +180,7 @@ def test_air_data_run_plots_and_report(tmp_path):
     s = json.loads((out / 'summary.json').read_text())
     last = [x for x in p.stderr.splitlines() if x.startswith('run_graph: t = ')][-1]
     assert float(LINE.search(last).group(1)) == pytest.approx(s['sim_time_s'], abs=0.005)
+    assert re.search(r'Mach \d\.\d{3} \u00b1 \d\.\d{3}, alpha -?\d+\.\d\d \u00b1 \d+\.\d\d deg', last), last
     sizes = _pngs(out / 'plots')
     assert 'air_data.png' in sizes and sizes['air_data.png'] > 20_000
     text = (out / 'report.md').read_text()

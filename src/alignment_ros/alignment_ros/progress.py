@@ -12,6 +12,7 @@ API (stable; the importer calls it too)::
     for ...:
         p.update(sim_s, messages=n)                          # as often as you like: rate-limited
         p.update(sim_s, estimate=(mu_rad, sigma_rad))        # (3,) and (3,) arrays, rad
+        p.update(sim_s, note='Mach 0.81 \u00b1 0.01')            # any short text, shown last
     p.close(sim_s, messages=n)                               # the final line
 
 ``mode`` ('auto' default: 'tty' when the stream is a terminal, else 'plain'; 'quiet' when
@@ -70,6 +71,7 @@ class Progress:
         self.sim_s: float | None = None
         self.messages: int | None = None
         self.estimate: tuple[np.ndarray, np.ndarray | None] | None = None
+        self.note: str | None = None
         self._first: tuple[float, float] | None = None     # (wall, sim) of the first update
         self._advanced = 0.0                                # wall time sim_s last moved on
         self._last_shown = -math.inf
@@ -84,9 +86,9 @@ class Progress:
     # ----- feeding ---------------------------------------------------------------------------
 
     def update(self, sim_s: float | None = None, messages: int | None = None,
-               estimate: tuple | None = None) -> None:
-        """Note what the job reached (absolute sim seconds, messages so far, (mu, sigma) rad);
-        shown at most every interval_s."""
+               estimate: tuple | None = None, note: str | None = None) -> None:
+        """Note what the job reached (absolute sim seconds, messages so far, (mu, sigma) rad, a
+        short text); shown at most every interval_s."""
         with self._lock:
             if self._closed:
                 return
@@ -98,6 +100,8 @@ class Progress:
                     self._first = (now, sim_s)
             if messages is not None:
                 self.messages = messages
+            if note is not None:
+                self.note = note
             if estimate is not None:
                 mu, sig = estimate
                 self.estimate = (np.asarray(mu, dtype=float), None if sig is None else np.asarray(sig, dtype=float))
@@ -149,6 +153,8 @@ class Progress:
             if sig is not None:
                 text += ' \u00b1 ' + ' '.join(f'{v * ARCMIN_PER_RAD:.2f}' for v in sig)
             out.append(text + ' arcmin')
+        if self.note:
+            out.append(self.note)
         return out
 
     def line(self, now: float | None = None) -> str:

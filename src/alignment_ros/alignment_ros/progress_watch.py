@@ -1,16 +1,18 @@
 """The launcher's eyes on a running graph, for its progress line: a small node in the launcher's
 process (its own rclpy context and executor thread, so the launcher's other rclpy use is
 untouched) reading /clock (simulation time), /alignment/misalignment and /alignment/state (the
-estimate and its 1-sigma). A replay's player sends its bag's /clock far ahead of what the
-filter has processed (it publishes as fast as DDS takes it): there (clock=False) the filter's
-output stamps are the simulation time reached. Out of the data path: BEST_EFFORT subscriptions with a short history,
-so no publisher ever waits for them (a reliable writer neither blocks on nor resends to a
-best-effort reader; a node's end-of-run acknowledgements count reliable readers only), and it
-publishes nothing. The nodes hold their messages until the recorder itself has matched
-(``hold_for_node``), so this extra subscriber cannot make the recorder miss any. Messages so
-far: the caller's count (the recorder's progress lines)."""
+estimate and its 1-sigma), and /air_data/state (Mach and alpha) in air-data runs. A replay's
+player sends its bag's /clock far ahead of what the filter has processed (it publishes as fast
+as DDS takes it): there (clock=False) the filter's output stamps are the simulation time
+reached. Out of the data path: BEST_EFFORT subscriptions with a short history, so no publisher
+ever waits for them (a reliable writer neither blocks on nor resends to a best-effort reader; a
+node's end-of-run acknowledgements count reliable readers only), and it publishes nothing. The
+nodes hold their messages until the recorder itself has matched (``hold_for_node``), so this
+extra subscriber cannot make the recorder miss any. Messages so far: the caller's count (the
+recorder's progress lines)."""
 from __future__ import annotations
 
+import math
 import sys
 import threading
 
@@ -52,6 +54,7 @@ class GraphWatcher:
             node.create_subscription(Clock, topics.CLOCK, self._on_clock, WATCH_QOS)
         node.create_subscription(Vector3Stamped, topics.ALIGN_MISALIGNMENT, self._on_estimate, WATCH_QOS)
         node.create_subscription(Float64MultiArray, topics.ALIGN_STATE, self._on_state, WATCH_QOS)
+        node.create_subscription(Float64MultiArray, topics.AIR_DATA_STATE, self._on_air_data, WATCH_QOS)
         executor = SingleThreadedExecutor(context=self._ctx)
         executor.add_node(node)
 
@@ -83,11 +86,27 @@ class GraphWatcher:
         mu = (m.vector.x, m.vector.y, m.vector.z)
         self.progress.update(to_ns(m.header.stamp) * 1e-9, estimate=(mu, self._sigma))
 
+    def _on_air_data(self, m: Float64MultiArray) -> None:
+        try:
+            self.progress.update(note=air_data_note(state_layout.from_msg(m)))
+        except ValueError:
+            pass
+
     def _on_state(self, m: Float64MultiArray) -> None:
         try:
             self._sigma = state_layout.from_msg(m).misalignment_sigma()
         except ValueError:
             self._sigma = None
+
+
+def air_data_note(st: state_layout.StateRecord) -> str | None:
+    """'Mach M \u00b1 s, alpha A \u00b1 s deg' of an /air_data/state record (None without them)."""
+    value, sigma = st.rows.get('value'), st.rows.get('sigma')
+    if value is None or sigma is None or 'mach' not in st.labels or 'alpha_rad' not in st.labels:
+        return None
+    i, j = st.labels.index('mach'), st.labels.index('alpha_rad')
+    return (f'Mach {value[i]:.3f} \u00b1 {sigma[i]:.3f}, alpha {math.degrees(value[j]):.2f} '
+            f'\u00b1 {math.degrees(sigma[j]):.2f} deg')
 
 
 class LiveProgress:
