@@ -109,3 +109,13 @@ def test_on_a_terminal_one_updating_line():
     final = text.rstrip('\r\n').split('\r')[-1]
     assert LINE.search(final).groups() == ('20.00', '20.00')
     assert '100%' in final and '1000 msgs' in final
+
+
+def test_abandoned_no_final_line():
+    out = io.StringIO()
+    p = Progress('run_graph', 12.0, 0.0, stream=out, interval_s=3600.0)
+    p.update(2.0)
+    p.abandon()
+    p.update(5.0)
+    p.close(12.0)
+    assert out.getvalue().splitlines() == ['run_graph: t = 2.00 / 12.00 s']

@@ -182,7 +182,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
     wall = _run(run, a, sc, params, live)
     run.end(out / 'bag')
     s = _summary(run, sc, wall)
-    live.close(s)
+    live.close(s if run.interrupted is None else None)
     if not a.no_plots and run.interrupted is None:
         run_report.write(out, s)
     if run.interrupted is not None:

@@ -124,6 +124,13 @@ class Progress:
             if self._bar is not None:
                 self._bar.close()
 
+    def abandon(self) -> None:
+        """End without a final line (a job stopped by a signal says where in its own line)."""
+        with self._lock:
+            self._closed = True
+            if self._bar is not None:
+                self._bar.close()
+
     # ----- what is shown ---------------------------------------------------------------------
 
     def rtf(self, now: float | None = None) -> float | None:

@@ -129,8 +129,10 @@ class LiveProgress:
         self.progress.update(stamp_ns * 1e-9 if stamp_ns else None, messages=messages)
 
     def close(self, summary: dict | None) -> None:
+        """The final line with the summary's simulated time; none without a summary (a run
+        stopped by a signal, or without a bag, says so in its own line)."""
         self.watcher.stop()
         if summary is None or summary.get('sim_time_s') is None:
-            self.progress.close()
+            self.progress.abandon()
             return
         self.progress.close(self.progress.start_s + summary['sim_time_s'])

@@ -169,7 +169,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
         summary.write({'complete': False, 'lost_total': None,
                        'problems': [*run.problems, f'no bag to read: {e}'],
                        'replayed_from': str(bag)}, out)
-    live.close(s)
+    live.close(s if run.interrupted is None else None)
     if not a.no_plots and run.interrupted is None:
         run_report.write(out, s, input_bag=bag)
     if run.interrupted is not None:
