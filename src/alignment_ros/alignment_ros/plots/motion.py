@@ -37,6 +37,6 @@ def motion(s: RunSeries, path: Path) -> Path | None:
         else:
             style.note(ax, 'no valid LDV measurement')
         ax.set_ylabel('deck velocity (m/s)')
-        ax.set_title(f'aircraft relative to the deck (/ldv/twist, ship axes): {int(ok.sum())} of '
-                     f'{len(ok)} samples valid')
+        ax.set_title(f'aircraft relative to the deck (/ldv/twist, ship axes): {100 * ok.mean():.0f} % of '
+                     f'the samples valid')
     return style.finish(fig, axs, "Ship motion and the aircraft's deck velocity", path)
