@@ -80,8 +80,8 @@ class Progress:
         self._bar: tqdm | None = None
         if self.mode == 'tty':
             self._bar = tqdm(total=total_s, file=self.stream, desc=label, dynamic_ncols=True,
-                             bar_format='{desc}: {percentage:3.0f}%|{bar:20}| {postfix}' if total_s
-                             else '{desc}: {postfix}', mininterval=0, leave=True)
+                             bar_format='{percentage:3.0f}%|{bar:20}| {desc}' if total_s else '{desc}',
+                             mininterval=0, leave=True)
 
     # ----- feeding ---------------------------------------------------------------------------
 
@@ -174,7 +174,7 @@ class Progress:
         if self._bar is not None:
             if self.sim_s is not None and self.total_s:
                 self._bar.n = min(max(0.0, self.sim_s - self.start_s), self.total_s)
-            self._bar.set_postfix_str(', '.join(self.fields(now)), refresh=False)
+            self._bar.set_description_str(self.line(now), refresh=False)
             self._bar.refresh()
             return
         print(self.line(now) + (' (done)' if final else ''), file=self.stream, flush=True)

@@ -342,13 +342,14 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str
 def _reached_ns(rec: Recorder) -> int:
     if rec.clock_ns is not None:
         return rec.clock_ns
-    return max((t for k, t in rec.last_stamp_ns.items() if k not in WALL_STAMPED), default=0)
+    return max((t for k, t in rec.last_stamp_ns.items() if k in rec.stamped_seen and k not in WALL_STAMPED),
+               default=0)
 
 
 def _progress(rec: Recorder, progress: Progress, lines: bool) -> None:
     """The progress line (stderr) and, for a launcher, 'recorder progress MESSAGES STAMP_NS': the
-    time reached is /clock's when recorded, else the latest log time of a topic not stamped with
-    the wall clock by rcl itself (/rosout, /parameter_events)."""
+    time reached is /clock's when recorded, else the latest stamp of a topic whose messages carry
+    one, but for those rcl stamps with the wall clock (/rosout, /parameter_events)."""
     t_ns, total = _reached_ns(rec), sum(rec.counts.values())
     progress.update(t_ns / NS if t_ns else None, messages=total)
     if lines:
