@@ -147,10 +147,11 @@ def test_replay_without_truth_plain_progress_and_plots(truthless_replay):
     # the replay's own bag has the filter's outputs, its input the ship and the LDV
     assert set(sizes) == {'misalignment.png', 'states.png', 'consistency.png', 'motion.png'}
     text = (out / 'report.md').read_text()
-    assert 'No misalignment score' in text
+    assert 'No misalignment score' in text or 'No truth in the input' in text
     est = estimates_from_bag(out / 'bag')
+    last = text[text.index('Last estimate in the bag'):]
     for k, axis in enumerate(AXES):
-        row = next(x for x in text.splitlines() if x.startswith(f'| {axis} |'))
+        row = next(x for x in last.splitlines() if x.startswith(f'| {axis} |'))
         shown = [float(c) for c in row.strip('|').split('|')[1:]]
         assert shown == [round(est['misalignment'][-1, k] * ARCMIN_PER_RAD, 3),
                          round(est['sigma'][-1, k] * ARCMIN_PER_RAD, 3)]

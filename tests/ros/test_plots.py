@@ -23,8 +23,10 @@ NS = 1_000_000_000
 ARCMIN = math.pi / 180.0 / 60.0
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 OLD = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dV_U', 'eps_x', 'eps_y', 'eps_z')
-NEW = ('misalignment_x_rad', 'misalignment_y_rad', 'misalignment_z_rad', 'gyro_bias_x_radps',
+# the unit-labelled layout (issue 13: rows t_s|estimate|sigma|mu_sigma|correction, names with their unit)
+NEW = ('attitude_error_E_rad', 'attitude_error_N_rad', 'attitude_error_U_rad', 'gyro_bias_x_radps',
        'gyro_bias_y_radps', 'gyro_bias_z_radps', 'master_delay_s')
+NEW_ROWS = ('t_s', 'estimate', 'sigma', 'mu_sigma', 'correction')
 
 
 def _state_msg(t_s: float, labels, rows: dict[str, list[float]]) -> Float64MultiArray:
@@ -40,9 +42,11 @@ def test_state_layout_today_and_unit_labelled():
                                                       'mu_sigma': [1e-4, 2e-4, 3e-4] + [0.0] * (n - 3)}))
     assert old.t_s == 2.0 and old.misalignment_sigma().tolist() == [1e-4, 2e-4, 3e-4]
     k = len(NEW)
-    new = state_layout.from_msg(_state_msg(3.0, NEW, {'t_s': [3.0] * k, 'value': [0.0] * k,
-                                                      'sigma': [5e-4, 6e-4, 7e-4, 1e-6, 1e-6, 1e-6, 1e-3]}))
-    assert new.misalignment_sigma().tolist() == [5e-4, 6e-4, 7e-4]
+    new = state_layout.from_msg(_state_msg(3.0, NEW, {'t_s': [3.0] * k, 'estimate': [0.0] * k,
+                                                      'sigma': [1e-3] * k, 'mu_sigma': [5e-4, 6e-4, 7e-4] + [0.0] * 4,
+                                                      'correction': [0.0] * k}))
+    assert new.t_s == 3.0 and new.misalignment_sigma().tolist() == [5e-4, 6e-4, 7e-4]
+    assert [state_layout.group_of(n) for n in NEW] == ['attitude_error'] * 3 + ['gyro_bias'] * 3 + ['master_delay']
     with pytest.raises(ValueError, match='values for'):
         state_layout.parse([('t_s|value', 2), ('a,b', 2)], [1.0, 2.0, 3.0])
 
@@ -50,7 +54,8 @@ def test_state_layout_today_and_unit_labelled():
 @pytest.mark.parametrize('label, unit, factor', [
     ('phi_E', 'arcmin', 180 * 60 / math.pi), ('eps_x', 'deg/h', 180 / math.pi * 3600),
     ('nabla_y', 'mg', 1000 / 9.80665), ('dV_N', 'm/s', 1.0), ('gyro_bias_x_radps', 'deg/h', 180 / math.pi * 3600),
-    ('accel_bias_x_mps2', 'mg', 1000 / 9.80665), ('lever_arm_x_m', 'm', 1.0), ('master_delay_s', 'ms', 1000.0),
+    ('accel_bias_x_mps2', 'mg', 1000 / 9.80665), ('lever_arm_error_x_m', 'm', 1.0), ('master_delay_s', 'ms', 1000.0),
+    ('attitude_error_E_rad', 'arcmin', 180 * 60 / math.pi), ('doppler_scale_factor_error_ratio', 'ppm', 1e6),
     ('mystery', '', 1.0)])
 def test_display_units_from_names(label, unit, factor):
     got_unit, got = state_layout.display_unit(label)
@@ -96,9 +101,12 @@ def write_bag(path: Path, labels, truth: bool) -> None:
             t = NS + k * NS // 10
             sig = (10.0 - 9.0 * k / 20) * ARCMIN
             w.write('/alignment/misalignment', _vec(t, mu + np.array([1.0, -2.0, 0.5]) * ARCMIN), t)
-            rows = {'t_s': [t / NS] * n, 'value': [0.0] * n, 'sigma': [sig] * n}
             if 'phi_E' in labels:
-                rows['mu_sigma'] = [sig] * 3 + [0.0] * (n - 3)
+                rows = {'t_s': [t / NS] * n, 'value': [0.0] * n, 'sigma': [sig] * n,
+                        'mu_sigma': [sig] * 3 + [0.0] * (n - 3)}
+            else:
+                rows = dict(zip(NEW_ROWS, ([t / NS] * n, [0.0] * n, [sig] * n, [sig] * 3 + [0.0] * (n - 3),
+                                           [0.0] * n)))
             w.write('/alignment/state', serialize_message(_state_msg(t / NS, labels, rows)), t)
             if truth:
                 w.write('/truth/misalignment', _vec(t, mu), t)
@@ -131,3 +139,20 @@ def test_nothing_to_draw(tmp_path):
     with BagWriter(bag) as w:
         w.add_topic('/ship/fix', 'sensor_msgs/msg/NavSatFix')
     assert plots.draw_all([bag], tmp_path / 'plots') == []
+
+
+def test_report_of_a_truth_free_summary_with_the_whole_estimate():
+    """summary.json without truth (``truth: false``: estimate and 1 sigma only), with the whole
+    estimate and the innovation whiteness (issue 13's keys): the report shows each."""
+    s = {'truth': False, 'misalignment_truth_rad': None, 'misalignment_estimate_rad': [ARCMIN, -2 * ARCMIN, 0.0],
+         'misalignment_sigma_rad': [0.1 * ARCMIN] * 3, 'estimate_stamp_s': 12.5, 'sim_time_s': 12.0,
+         'planned_sim_time_s': 12.0, 'wall_time_s': 6.0, 'real_time_factor': 2.0, 'lost_total': 0, 'complete': True,
+         'state_estimate': {'t_s': 12.5, 'labels': ['gyro_bias_x_radps', 'master_delay_s'],
+                            'estimate': [math.radians(0.5) / 3600, 0.02], 'sigma': [math.radians(0.1) / 3600, 1e-4]},
+         'innovation_whiteness': {'result': 'pass', 'p': 0.42, 'r1_max': 0.05, 'band': 0.2, 'windows': 4,
+                                  'windows_failed': 0, 'relative_velocity': 'ldv'}}
+    text = run_report.markdown('t', s, plots.series.RunSeries(), [], Path('.'))
+    assert 'No truth in the input' in text and '| x (roll) | 1.000 | 0.100 |' in text
+    assert '| y (pitch) | -2.000 | 0.100 |' in text
+    assert '| gyro_bias_x_radps | 0.5 | 0.1 | deg/h |' in text and '| master_delay_s | 20 | 0.1 | ms |' in text
+    assert 'innovation whiteness: pass (last window: Ljung-Box p 0.42' in text

@@ -16,7 +16,7 @@ from . import air_data_summary, plots
 from .plots.alignment import misalignment_sigma
 from .plots.consistency import verdict
 from .plots.series import RunSeries
-from .state_layout import ARCMIN_PER_RAD
+from .state_layout import ARCMIN_PER_RAD, display_unit
 
 AXES = ('x (roll)', 'y (pitch)', 'z (yaw)')
 COUNTER_KEYS = ('updates', 'gated', 'imu', 'master', 'ldv', 'doppler', 'imu_gaps', 'bridged_gaps',
@@ -31,7 +31,13 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
 
 
 def result_table(s: dict) -> list[str]:
-    """The summary's misalignment score (arcmin, 3 decimals as the printed table), or why none."""
+    """The summary's misalignment score (arcmin, 3 decimals as the printed table); without truth
+    the estimate and its 1σ when the summary gives them (``truth: false``), or why none."""
+    if s.get('truth') is False and s.get('misalignment_estimate_rad') is not None:
+        est, sig = s['misalignment_estimate_rad'], s['misalignment_sigma_rad']
+        rows = [[AXES[k], f'{est[k] * ARCMIN_PER_RAD:.3f}', f'{sig[k] * ARCMIN_PER_RAD:.3f}'] for k in range(3)]
+        return [f"No truth in the input: the misalignment estimate and its 1σ at t = {s['estimate_stamp_s']:.2f} s, "
+                'aircraft FLU axes, arcmin:', '', *_table(['axis', 'estimate', '1σ'], rows)]
     if s.get('misalignment_truth_rad') is None:
         return ['No misalignment score (no /truth/misalignment to score against).']
     mu, est = np.array(s['misalignment_truth_rad']), np.array(s['misalignment_estimate_rad'])
@@ -40,6 +46,30 @@ def result_table(s: dict) -> list[str]:
              f'{(est[k] - mu[k]) * ARCMIN_PER_RAD:.3f}', f'{sig[k] * ARCMIN_PER_RAD:.3f}'] for k in range(3)]
     head = f"Misalignment at t = {s['scored_at_s']:.2f} s (the end of deck matching), aircraft FLU axes, arcmin:"
     return [head, '', *_table(['axis', 'truth', 'estimate', 'error', '1σ'], rows)]
+
+
+def whole_estimate(s: dict) -> list[str]:
+    """The summary's whole estimate (``state_estimate``: every state by its unit-labelled name),
+    each in the unit the plots use."""
+    st = s.get('state_estimate')
+    if not st:
+        return []
+    rows = []
+    for name, v, sg in zip(st['labels'], st['estimate'], st['sigma']):
+        unit, f = display_unit(name)
+        rows.append([name, f'{v * f:.4g}', f'{sg * f:.4g}', unit or '-'])
+    return [f"The whole estimate at t = {st['t_s']:.2f} s:", '', *_table(['state', 'estimate', '1σ', 'unit'], rows)]
+
+
+def whiteness_lines(s: dict) -> list[str]:
+    w = s.get('innovation_whiteness')
+    if 'innovation_whiteness' not in s:
+        return []
+    if not w:
+        return ['- innovation whiteness: no window completed']
+    return [f"- innovation whiteness: {w['result']} (last window: Ljung-Box p {w['p']:.3g}, lag-1 "
+            f"autocorrelation up to {w['r1_max']:.3f} against ±{w['band']:.3f}; {w['windows_failed']} of "
+            f"{w['windows']} windows failed); relative velocity: {w['relative_velocity']}"]
 
 
 def air_table(s: dict) -> list[str]:
@@ -119,7 +149,10 @@ def markdown(title: str, s: dict | None, series: RunSeries, drawn: list[tuple[st
         air = air_table(s)
         if air:
             lines += [*air, '']
-        lines += [*run_lines(s), '']
+        lines += [*run_lines(s), *whiteness_lines(s), '']
+        whole = whole_estimate(s)
+        if whole:
+            lines += [*whole, '']
     est = last_estimate(series)
     if est:
         lines += [*est, '']

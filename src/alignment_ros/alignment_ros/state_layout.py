@@ -19,7 +19,7 @@ SUFFIX_UNITS = (
     ('_radps', ('deg/h', DEG_PER_RAD * 3600.0)), ('_rad_s', ('deg/h', DEG_PER_RAD * 3600.0)),
     ('_dph', ('deg/h', 1.0)), ('_mps2', ('mg', 1e3 / G0)), ('_mg', ('mg', 1.0)),
     ('_mps', ('m/s', 1.0)), ('_rad', ('arcmin', ARCMIN_PER_RAD)), ('_arcmin', ('arcmin', 1.0)),
-    ('_ms', ('ms', 1.0)), ('_s', ('ms', 1e3)), ('_m', ('m', 1.0)),
+    ('_ms', ('ms', 1.0)), ('_s', ('ms', 1e3)), ('_m', ('m', 1.0)), ('_ratio', ('ppm', 1e6)),
 )
 # name prefix -> display unit, factor: the models' short names (phi_E, dV_N, eps_x, nabla_y, ...)
 PREFIX_UNITS = (

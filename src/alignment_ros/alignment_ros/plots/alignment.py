@@ -126,7 +126,8 @@ def states(s: RunSeries, path: Path) -> Path | None:
         lim = style.limits(vals, t)
         if lim:
             ax.set_ylim(*lim)
-        ax.set_ylabel(f'{name} ({unit})' if unit else name)
+        shown = name.replace('_', ' ')
+        ax.set_ylabel(f'{shown} ({unit})' if unit else shown)
         if len(groups[name]) > 1:
             ax.legend(loc='best', ncol=len(groups[name]), fontsize=7)
     for n in range(len(names), rows * cols):
