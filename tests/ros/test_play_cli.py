@@ -279,3 +279,22 @@ def test_defaults_are_ros2s(bag: Path, tmp_path: Path, capsys: pytest.CaptureFix
     with pytest.raises(SystemExit):
         parse_args([str(tmp_path / 'missing')])
     assert "Bag path '" in capsys.readouterr().err
+
+
+def test_progress_line_and_quiet(bag: Path, listen) -> None:
+    """Off a terminal the player ends with one plain progress line: the bag time it played of
+    the planned span (2.00 s: 1.0 to 3.0 s; --playback-duration 0.6: 0.60 s) and the messages;
+    --quiet: none."""
+    lst = listen({'/a/imu': Imu})
+    rc, _, err = lst.play(bag, '-r', '0', '--topics', '/a/imu')
+    assert rc == 0, err
+    lines = [x for x in err.splitlines() if x.startswith('play: ')]
+    assert len(lines) == 1 and lines[0].startswith('play: t = 2.00 / 2.00 s')
+    assert '21 msgs' in lines[0] and lines[0].endswith('(done)')
+    lst.reset()
+    rc, _, err = lst.play(bag, '-r', '4', '--playback-duration', '0.6', '--topics', '/a/imu')
+    assert rc == 0, err
+    assert [x for x in err.splitlines() if x.startswith('play: ')][-1].startswith('play: t = 0.60 / 0.60 s')
+    lst.reset()
+    rc, _, err = lst.play(bag, '-r', '0', '--topics', '/a/imu', '--quiet')
+    assert rc == 0 and 'play: ' not in err, err

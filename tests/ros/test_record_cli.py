@@ -31,7 +31,7 @@ N = 40                      # messages per topic, stamped 1.0 s + 0.1 s * i
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 RECORDERS = {               # name -> record.sh arguments
     'all': ['-a'],
-    'positional': ['/cli/chatter', '/sensors/temp'],
+    'positional': ['/cli/chatter', '/sensors/temp', '--quiet'],
     'regex': ['-e', '^/sensors/'],
     'exclude': ['-a', '-x', 'imu', '--exclude-topics', '/cli/chatter'],
     'split': ['--topics', '/sensors/temp', '-d', '1'],
@@ -100,6 +100,7 @@ def recorded(tmp_path_factory) -> dict[str, Path]:
         for name, p in procs.items():
             _, err = p.communicate(timeout=60)
             assert name == 'killed' or p.returncode == 0, f'{name}: {err}'
+            (out / f'{name}.stderr').write_text(err)
     finally:
         for p in procs.values():
             if p.poll() is None:
@@ -131,6 +132,16 @@ def test_all_records_every_visible_topic_with_graph_types(recorded):
     got = [deserialize_message(m.data, String).data
            for m in BagReader(recorded['all']).messages(['/cli/chatter'])]
     assert got == [f'hello {i}' for i in range(N)]
+
+
+def test_progress_line_ends_with_the_recording(recorded):
+    """Off a terminal: a final plain line with the latest stamp recorded (4.9 s) and the bag's
+    message count; --quiet (the 'positional' recorder): none."""
+    err = (recorded['all'].parent / 'all.stderr').read_text()
+    last = [x for x in err.splitlines() if x.startswith('record: ')][-1]
+    total = sum(m['message_count'] for m in meta_topics(recorded['all']).values())
+    assert last.startswith('record: t = 4.90 s') and f'{total} msgs' in last and last.endswith('(done)')
+    assert 'record: ' not in (recorded['positional'].parent / 'positional.stderr').read_text()
 
 
 def test_positional_topics_record_only_those(recorded):

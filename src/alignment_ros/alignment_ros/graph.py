@@ -29,7 +29,7 @@ import yaml
 from alignment_core.config import scenario as core_scenario
 from alignment_core.validation import ConfigError
 
-from . import summary, topics
+from . import run_report, summary, topics
 from .bag import BagError
 from .launch import (
     OneLineParser,
@@ -44,6 +44,7 @@ from .launch import (
     watch_end_time,
 )
 from .params import given_parameters
+from .progress_watch import LiveProgress
 from .shm_cleanup import clean_stale
 from .signals import Interrupted, SignalGuard
 
@@ -149,6 +150,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument('--domain-id', type=domain_id, default=None,
                     help='ROS_DOMAIN_ID for the run (default: the exported ROS_DOMAIN_ID, else a '
                          'free one; printed at the start)')
+    ap.add_argument('--quiet', action='store_true', help='no progress line on stderr')
+    ap.add_argument('--no-plots', action='store_true', help='no plots nor report.md in DIR')
     return ap.parse_args(argv)
 
 
@@ -175,9 +178,13 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
     (out / 'scenario.yaml').write_text(core_scenario.dump(sc))
     params = out / 'params.yaml'
     write_params(given, sc, params)
-    wall = _run(run, a, sc, params)
+    live = LiveProgress('run_graph', sc.duration_s, sc.start_time_s, quiet=a.quiet)
+    wall = _run(run, a, sc, params, live)
     run.end(out / 'bag')
     s = _summary(run, sc, wall)
+    live.close(s if run.interrupted is None else None)
+    if not a.no_plots and run.interrupted is None:
+        run_report.write(out, s)
     if run.interrupted is not None:
         print(run.stopped_line(s), file=sys.stderr)
     else:
@@ -189,7 +196,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
     return run.exit_code(s is not None and s['complete'])
 
 
-def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Path) -> float:
+def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Path, live: LiveProgress) -> float:
     """Start the recorder and the nodes, wait until every stream reached the end, finish the
     recording; return the wall time to the end (or to the cut: run.interrupted/failure)."""
     out = run.out
@@ -199,7 +206,8 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
         matched = matched_of(sc)
         expect = out / 'stats' / 'published.json'
         rec = start_recorder(run, out / 'bag', end_s, recorded_of(sc), end_topics_of(sc), expect_counts=expect)
-        end_reached = watch_end_time(rec)
+        end_reached = watch_end_time(rec, live.recorded)
+        live.start()
         for n in nodes_of(sc):
             start(run, n, params, matched=matched)
         start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',

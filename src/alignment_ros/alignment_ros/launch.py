@@ -211,7 +211,7 @@ def start_recorder(run: Run, bag: Path, end_time_s: float, topic_list, wait_topi
     cmd = [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/recorder'),
            '--output', str(bag), '--node-name', 'recorder', '--idle-timeout', '0',
            '--end-time', repr(end_time_s), '--stats', str(out / 'stats' / 'recorder.json'),
-           '--topics', *topic_list, '--wait-topics', *wait_topics]
+           '--topics', *topic_list, '--wait-topics', *wait_topics, '--quiet', '--progress-lines']
     if expect_counts is not None:
         cmd += ['--expect-counts', str(expect_counts),
                 '--expect-timeout', repr(RECORDER_EXPECT_TIMEOUT_S)]
@@ -227,9 +227,9 @@ def start_recorder(run: Run, bag: Path, end_time_s: float, topic_list, wait_topi
     raise RuntimeError(f'the recorder did not become ready; see {out}/logs/recorder.log')
 
 
-def watch_end_time(recorder: subprocess.Popen) -> threading.Event:
+def watch_end_time(recorder: subprocess.Popen, on_progress=None) -> threading.Event:
     """An event set when the recorder prints that end-time is reached (its stdout is read to
-    the end in a background thread)."""
+    the end in a background thread); on_progress(messages, stamp_ns) gets its progress lines."""
     reached = threading.Event()
 
     def read() -> None:
@@ -237,6 +237,11 @@ def watch_end_time(recorder: subprocess.Popen) -> threading.Event:
         for line in recorder.stdout:
             if 'end-time reached' in line:
                 reached.set()
+            elif on_progress is not None and line.startswith('recorder progress '):
+                messages, stamp_ns = line.split()[2:4]
+                on_progress(int(messages), int(stamp_ns))
+            elif on_progress is not None and line.startswith('recorder done '):
+                on_progress(int(line.split(': ', 1)[1].split()[0]), 0)    # its final count
     threading.Thread(target=read, daemon=True).start()
     return reached
 

@@ -160,6 +160,8 @@ def build_parser() -> argparse.ArgumentParser:
     ext.add_argument('--wait-timeout', type=float, default=30.0, metavar='S',
                      help='give up waiting for subscribers after S seconds (default 30): status 1')
     ext.add_argument('--stats', metavar='FILE', help='write the published counts as JSON')
+    ext.add_argument('--quiet', action='store_true',
+                     help='no progress line on stderr (bag time played, messages, rate, ETA)')
     return p
 
 

@@ -42,6 +42,7 @@ from alignment_ros.bag import BagError, BagReader
 from alignment_ros.bag_qos import QoSOverrideError, adapt_recorded, load_overrides, recorded_offers
 from alignment_ros.cli_options import split_ros_args
 from alignment_ros.play_options import parse_args
+from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.topics import msg_class
 
@@ -155,6 +156,14 @@ class Playback:
         if missing:
             log.warning('topics not in the bag: %s', ', '.join(missing))
         self.counts = dict.fromkeys(self.pubs, 0)
+        self.played = 0
+        self.last_ns: int | None = None
+        meta = reader.metadata()
+        end_ns = meta.starting_time_ns + meta.duration_ns
+        if self.until_ns > -1:
+            end_ns = min(end_ns, self.until_ns)
+        self.progress = Progress('play', max(0, end_ns - self.start_ns) / NS, self.start_ns / NS,
+                                 quiet=args.quiet)
         self.clock_pub = None
         if args.clock > 0 or args.clock_topics or args.clock_topics_all:
             self.clock_pub = node.create_publisher(Clock, '/clock', CLOCK_QOS)
@@ -190,6 +199,10 @@ class Playback:
                 self.publish_clock()
             self.pubs[topic].publish(data)
             self.counts[topic] += 1
+            self.played += 1
+            self.last_ns = t_ns
+            if self.played % PROGRESS_EVERY == 0:
+                self.progress.update(t_ns / NS, messages=self.played)
 
     def wait_acked(self) -> bool | None:
         """``--wait-for-all-acked``: None when not asked, else whether every message was acked.
@@ -216,6 +229,7 @@ class Playback:
 
 
 FINAL_ACK_S = 1.0
+PROGRESS_EVERY = 50      # messages between progress updates (each is rate-limited too)
 
 
 def _sleep(seconds: float, stop: dict[str, bool]) -> bool:
@@ -259,6 +273,7 @@ def play(args: argparse.Namespace, reader: BagReader, ros_argv: list[str],
             if not args.loop:
                 break
         wall = time.monotonic() - t_wall0
+        pb.progress.close(None if pb.last_ns is None else pb.last_ns / NS, pb.played)
         done.set()
         acked = pb.wait_acked()
     finally:

@@ -131,6 +131,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument('--stats', type=Path, metavar='FILE', help='write counts and end reason as JSON')
     g.add_argument('--executor', choices=('events', 'single'), default='events',
                    help='rclpy executor (default: events, the EventsExecutor)')
+    g.add_argument('--quiet', action='store_true',
+                   help='no progress line on stderr (simulation time, messages, rate)')
+    g.add_argument('--progress-lines', action='store_true', help=argparse.SUPPRESS)  # launchers
     return p
 
 

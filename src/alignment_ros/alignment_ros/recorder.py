@@ -56,6 +56,7 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from alignment_ros.bag import BagError, BagWriter, stamp_reader
+from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.record_options import TopicFilter, parse_args
 from alignment_ros.topics import CLOCK, msg_class
@@ -66,6 +67,7 @@ NS = 1_000_000_000
 SPIN_TIMEOUT_S = 0.05
 FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed recorder keeps)
 PUBLISHERS_INTERVAL_S = 1.0  # the recorded topics' publishers are looked up this often
+WALL_STAMPED = ('/rosout', '/parameter_events')   # rcl stamps these with the wall clock
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # rmw's name of a node not yet discovered
 
 
@@ -287,8 +289,8 @@ def make_executor(kind: str) -> Any:
     return SingleThreadedExecutor()
 
 
-def _loop(args: argparse.Namespace, rec: Recorder, executor: Any,
-          stop: dict[str, bool]) -> tuple[str, dict[str, int] | None]:
+def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str, bool],
+          progress: Progress) -> tuple[str, dict[str, int] | None]:
     """Spin until an end condition; return (end reason, expected counts)."""
     interval = max(args.polling_interval, 1) / 1000.0
     discovering = not args.no_discovery and (args.filter.discovers() or rec.pending_topics())
@@ -309,6 +311,7 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any,
         if now >= next_publishers:
             rec.note_publishers()
             next_publishers = now + PUBLISHERS_INTERVAL_S
+            _progress(rec, progress, args.progress_lines)
         if discovering and now >= next_poll:
             rec.discover()
             discovering = args.filter.discovers() or bool(rec.pending_topics())
@@ -336,6 +339,23 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any,
             return 'idle_timeout', expected
 
 
+def _reached_ns(rec: Recorder) -> int:
+    if rec.clock_ns is not None:
+        return rec.clock_ns
+    return max((t for k, t in rec.last_stamp_ns.items() if k in rec.stamped_seen and k not in WALL_STAMPED),
+               default=0)
+
+
+def _progress(rec: Recorder, progress: Progress, lines: bool) -> None:
+    """The progress line (stderr) and, for a launcher, 'recorder progress MESSAGES STAMP_NS': the
+    time reached is /clock's when recorded, else the latest stamp of a topic whose messages carry
+    one, but for those rcl stamps with the wall clock (/rosout, /parameter_events)."""
+    t_ns, total = _reached_ns(rec), sum(rec.counts.values())
+    progress.update(t_ns / NS if t_ns else None, messages=total)
+    if lines:
+        print(f'recorder progress {total} {t_ns}', flush=True)
+
+
 def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     """Record until an end condition; return the stats dict."""
     writer = BagWriter(args.output, max_bag_duration_s=args.max_bag_duration,
@@ -355,7 +375,10 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         executor.add_node(node)
         rec.discover()
         print('recorder ready', flush=True)
-        reason, expected = _loop(args, rec, executor, stop)
+        progress = Progress('record', None, quiet=args.quiet)
+        reason, expected = _loop(args, rec, executor, stop, progress)
+        t_ns = _reached_ns(rec)
+        progress.close(t_ns / NS if t_ns else None, sum(rec.counts.values()))
     finally:
         if rec is not None:
             rec.finish_endpoints()

@@ -37,7 +37,7 @@ from rclpy.signals import SignalHandlerOptions
 from alignment_core.estimation.models import DOPPLER_MODELS
 from alignment_core.validation import ConfigError
 
-from . import bag_reindex, replay_params, summary, topics
+from . import bag_reindex, replay_params, run_report, summary, topics
 from .bag import BagError, BagReader
 from .graph import start
 from .launch import (
@@ -52,6 +52,7 @@ from .launch import (
     watch_end_time,
 )
 from .params import NODE_SCOPES, node_scenario
+from .progress_watch import LiveProgress
 from .shm_cleanup import clean_stale
 from .signals import Interrupted, SignalGuard
 from .topics import FILTER_OUTPUT_TOPICS, SENSOR_TOPICS
@@ -106,6 +107,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument('--domain-id', type=domain_id, default=None,
                     help='ROS_DOMAIN_ID for the replay (default: the exported ROS_DOMAIN_ID, else a '
                          'free one; printed at the start)')
+    ap.add_argument('--quiet', action='store_true', help='no progress line on stderr')
+    ap.add_argument('--no-plots', action='store_true', help='no plots nor report.md in DIR')
     return ap.parse_args(argv)
 
 
@@ -174,7 +177,8 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
         run.problems.append(f'the input is {repaired.damage}')
     run.use_domain(a.domain_id)
     clean_stale(log=lambda m: print(f'replay: {m}', file=sys.stderr))   # killed runs' /dev/shm
-    wall = _run(run, bag, params, play, wait, end_ns, damaged=repaired is not None)
+    live = LiveProgress('replay', (end_ns - start_ns) * 1e-9, start_ns * 1e-9, quiet=a.quiet, clock=False)
+    wall = _run(run, bag, params, play, wait, end_ns, damaged=repaired is not None, live=live)
     run.end(out / 'bag')
     s = None
     try:
@@ -188,6 +192,9 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
         summary.write({'complete': False, 'lost_total': None,
                        'problems': [*run.problems, f'no bag to read: {e}'],
                        'replayed_from': str(bag)}, out)
+    live.close(s if run.interrupted is None else None)
+    if not a.no_plots and run.interrupted is None:
+        run_report.write(out, s, input_bag=bag)
     if run.interrupted is not None:
         print(run.stopped_line(s), file=sys.stderr)
     else:
@@ -200,7 +207,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
 
 
 def _run(run: Run, bag: Path, params: Path, play: list[str], wait: list[str], end_ns: int,
-         damaged: bool) -> float:
+         damaged: bool, live: LiveProgress) -> float:
     """Recorder, filter, player; wait until the outputs reach the end; finish the recording.
     Return the wall time to the end (or to the cut: run.interrupted/failure)."""
     out = run.out
@@ -209,14 +216,15 @@ def _run(run: Run, bag: Path, params: Path, play: list[str], wait: list[str], en
         expect = out / 'stats' / 'published.json'
         rec = start_recorder(run, out / 'bag', end_ns * 1e-9, list(FILTER_OUTPUT_TOPICS),
                              [topics.ALIGN_MISALIGNMENT], expect_counts=expect)
-        end_reached = watch_end_time(rec)
+        end_reached = watch_end_time(rec, live.recorded)
+        live.start()
         start(run, FILTER, params, '-p', HOLD, '-p', 'hold_for_node:=recorder')
         _wait_graph()
         player = run.spawn('player', [
             str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/player'), str(bag),
             '--topics', *play, '--stats', str(out / 'stats' / 'player.json'),
             '--rate', '0', '--lossless',   # as fast as the filter acknowledges, nothing lost
-            '--wait-subscribers', *wait],
+            '--wait-subscribers', *wait, '--quiet'],
             stdout=open(out / 'logs' / 'player.log', 'w'), stderr=subprocess.STDOUT)
         while player.poll() is None:
             run.check_running()
