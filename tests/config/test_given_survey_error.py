@@ -1,7 +1,7 @@
 """Survey error of the filter's lever arm (aircraft.lever_arm_survey_sigma_m, config/given.py):
 off by default (the filter's arm is the true one, bit for bit); on, a random constant per axis
-drawn once per seed (the filter node resolves the same: tests/ros/test_params.py); an explicit
-filter.lever_arm_m still wins."""
+drawn once per seed (the filter node resolves the same: tests/ros/test_params.py; the filter
+finding it: tests/estimation/test_lever_arm_survey.py); an explicit filter.lever_arm_m still wins."""
 from __future__ import annotations
 
 import numpy as np
