@@ -112,3 +112,11 @@ def test_without_truth_the_last_estimate_and_its_sigma(bag):
     t = summary.table(s)
     assert 'no truth in the input: estimate and 1 sigma only' in t and 'truth' not in t.split('\n')[1]
     assert 'truth' not in summary.summarise(bag, bag, 1.0, 2.0, 4.0, dict(PUBLISHED))   # the key only then
+
+
+def test_what_comes_after_the_end_is_not_scored(bag):
+    # a graph run's run-out: truth and outputs go on past the end (1.5 s here), the score is the end's
+    s = summary.summarise(bag, bag, 1.0, 0.5, 4.0, dict(PUBLISHED))
+    assert s['complete'] is True and s['sim_time_s'] == 0.5
+    assert s['scored_at_s'] == pytest.approx(1.5) and s['estimate_stamp_s'] == pytest.approx(1.5)
+    assert s['topics']['/alignment/misalignment'] == 21     # recorded all the same

@@ -126,8 +126,9 @@ def simulate(sc: Scenario) -> Inputs:
     return Inputs(ships, truth, imu, [o.sample for o in masters], ldv, doppler, sensor_truth)
 
 
-def align(sc: Scenario, inp: Inputs) -> TransferAlignment:
-    """Feed the inputs to a fresh filter in the order the graph's nodes publish them."""
+def align(sc: Scenario, inp: Inputs, final: bool = True) -> TransferAlignment:
+    """Feed the inputs to a fresh filter in the order the graph's nodes publish them, then
+    flush it (final False: no flush, as a node that never learns its inputs ended)."""
     filt = TransferAlignment(sc.filter, plane_of(sc), sc.rate_hz)
     j_ldv = j_master = j_dop = 0        # sensor streams with their own rate / latency: pushed by stamp
     doppler = inp.doppler or []
@@ -145,7 +146,8 @@ def align(sc: Scenario, inp: Inputs) -> TransferAlignment:
             filt.push_master(inp.master[j_master])
             j_master += 1
         filt.process()
-    filt.process(final=True)
+    if final:
+        filt.process(final=True)
     return filt
 
 

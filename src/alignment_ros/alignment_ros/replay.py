@@ -13,9 +13,10 @@ of them gives them (alignment_ros.replay_params). The parameters used are writte
 output's params.yaml. A bag without /truth/misalignment (a real recording) is summarised
 without truth: the estimate and its 1-sigma at the filter's last output, said so.
 
-The recording ends as run_graph's does: once the filter's
-outputs reached the input's end, the filter is stopped and the recorder records every message
-it reports having published (no idle timeout cuts it).
+The recording ends as run_graph's does: once the filter's outputs reached the input's end
+(the last /master/odom stamp; for a run of the graph, its scenario's end when earlier: its
+run-out after it is played, not judged), the filter is stopped and the recorder records every
+message it reports having published (no idle timeout cuts it).
 
 A damaged input bag (its recorder died, a file cut short) is repaired first
 (:mod:`alignment_ros.bag_reindex`, one line saying so) and replayed as far as it goes; the
@@ -34,6 +35,8 @@ from pathlib import Path
 import rclpy
 from rclpy.signals import SignalHandlerOptions
 
+from alignment_core import run_out
+from alignment_core.config import scenario as core_scenario
 from alignment_core.estimation.models import DOPPLER_MODELS
 from alignment_core.validation import ConfigError
 
@@ -143,6 +146,9 @@ def _input(bag: Path, params_in: Path | None, sets: list[str]) -> tuple[
         raise BagError(f'{bag}: no {topics.MASTER_ODOM} messages')
     # a cut input: its streams end at different stamps, the filter's outputs at the earliest
     end_ns = min(last.values()) if repaired is not None else last[topics.MASTER_ODOM]
+    scenario_file = bag.parent / 'scenario.yaml'     # a run of the graph: its end, not its run-out's
+    if bag.is_dir() and scenario_file.exists():
+        end_ns = min(end_ns, run_out.end_ns(core_scenario.load(str(scenario_file))))
     return (repaired, first[topics.MASTER_ODOM], end_ns, play, wait, topics.TRUTH_MISALIGNMENT in bag_topics,
             given, notes)
 

@@ -2,7 +2,8 @@
 
 The mounting misalignment is defined while the aircraft rides the deck (/truth/misalignment
 is published only then); the estimate scored is the filter's output at the last such stamp
-(the release, or the end of a deck run), or the latest output before it. A summary says
+(the release, or the end of a deck run), or the latest output before it. Only messages stamped
+up to the scenario's end count (a graph run's run-out after it: alignment_core/run_out.py). A summary says
 whether the run is complete (``complete``, ``problems``): a lost message, a foreign one, a run
 cut short or anything the launcher saw go wrong makes it incomplete (and the exit non-zero).
 
@@ -67,12 +68,14 @@ def state_estimate(bag: Path, at_s: float | None = None) -> dict | None:
     return dict(zip(('t_s', 'labels', 'estimate', 'sigma'), best))
 
 
-def whiteness(bag: Path) -> dict | None:
+def whiteness(bag: Path, until_ns: int | None = None) -> dict | None:
     """The alignment filter's last /diagnostics: its innovation whiteness window (pass / fail,
     Ljung-Box q, dof, p, the largest lag-1 autocorrelation and the white band; estimation/
     whiteness.py) and where the relative velocity came from; None before a completed window."""
     last = None
     for m in _read(bag, (topics.DIAGNOSTICS,))[topics.DIAGNOSTICS]:
+        if until_ns is not None and to_ns(m.header.stamp) > until_ns:
+            break
         for st in m.status:
             if st.name == 'alignment_filter':
                 last = {kv.key: kv.value for kv in st.values}
@@ -95,8 +98,10 @@ def whiteness_line(w: dict | None) -> str:
             f"{w['windows']} windows failed); relative velocity: {w['relative_velocity']}")
 
 
-def truth_from_bag(bag: Path) -> tuple[int, np.ndarray]:
-    d = _read(bag, (topics.TRUTH_MISALIGNMENT,))[topics.TRUTH_MISALIGNMENT]
+def truth_from_bag(bag: Path, until_ns: int | None = None) -> tuple[int, np.ndarray]:
+    """The last /truth/misalignment (stamped at or before until_ns, if given): stamp, vector."""
+    d = [m for m in _read(bag, (topics.TRUTH_MISALIGNMENT,))[topics.TRUTH_MISALIGNMENT]
+         if until_ns is None or to_ns(m.header.stamp) <= until_ns]
     if not d:
         raise ValueError(f'{bag}: no {topics.TRUTH_MISALIGNMENT} messages')
     m = d[-1]
@@ -114,16 +119,20 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     saw). The simulated time claimed is the one the filter's outputs reached; published_known
     False: some publishers' counts are missing (more may be lost than `lost` says); `truth`
     False: the input has no truth (the last estimate and its 1-sigma are reported instead)."""
+    end_ns = round((start_s + duration_s) * 1e9)
+    until_ns = end_ns + 1000                   # 1 us: the end given as float seconds
     est = estimates_from_bag(estimate_bag)
+    n_kept = int(np.searchsorted(est['t_ns'], until_ns, side='right'))   # a graph run's run-out: not scored
+    est = {k: v[:n_kept] for k, v in est.items()}
     problems = list(problems or [])
     air = air_data_summary.score(estimate_bag)
-    score = _score(truth_bag, est, problems, optional=air is not None) if truth else _estimate_only(est, problems)
+    score = (_score(truth_bag, est, problems, optional=air is not None, until_ns=until_ns) if truth
+             else _estimate_only(est, problems))
     own = topic_counts(estimate_bag)
     counts = {**topic_counts(truth_bag), **own} if Path(truth_bag) != Path(estimate_bag) else own
     pub = published or {}
     lost = {k: max(0, pub[k] - counts.get(k, 0)) for k in sorted(pub)}
     foreign = {k: n - pub.get(k, 0) for k, n in sorted(own.items()) if pub and n > pub.get(k, 0)}
-    end_ns = round((start_s + duration_s) * 1e9)
     last_ns = int(est['t_ns'][-1]) if len(est['t_ns']) else None
     reached = duration_s
     if last_ns is None or last_ns < end_ns - 1000:      # 1 us: the end given as float seconds
@@ -141,7 +150,7 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
         **score,
         **({} if truth else {'truth': False}),     # the key only where there is none
         'state_estimate': state_estimate(estimate_bag, score.get('scored_at_s')),
-        'innovation_whiteness': whiteness(estimate_bag),
+        'innovation_whiteness': whiteness(estimate_bag, until_ns),
         'air_data': air,
         'sim_time_s': reached,
         'planned_sim_time_s': duration_s,
@@ -160,11 +169,12 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     }
 
 
-def _score(truth_bag: Path, est: dict[str, np.ndarray], problems: list[str], optional: bool = False) -> dict:
+def _score(truth_bag: Path, est: dict[str, np.ndarray], problems: list[str], optional: bool = False,
+           until_ns: int | None = None) -> dict:
     """Truth and estimate at the end of deck matching (None and a problem if unavailable;
     `optional`: a run with air data and no deck phase has no misalignment to score)."""
     try:
-        t_rel, mu = truth_from_bag(truth_bag)
+        t_rel, mu = truth_from_bag(truth_bag, until_ns)
     except ValueError as e:
         if not optional:
             problems.append(f'nothing to score: {e}')

@@ -10,7 +10,7 @@ from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import NavSatFix
 
-from alignment_core import pipeline
+from alignment_core import pipeline, run_out
 from alignment_core.validation import ConfigError
 from alignment_ros import convert, node_util, topics
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
@@ -78,16 +78,17 @@ class ShipMotionNode(node_util.CountingNode):
         rtf = self.get_parameter('real_time_factor').value
         dec = self.get_parameter('fix_decimation').value
         wall0 = time.monotonic()
-        self.get_logger().info(f'scenario {sc.name}: {sc.duration_s} s at {sc.rate_hz} Hz, '
-                               f'real-time factor {rtf}')
+        n = run_out.simulated_samples(sc)     # on past the end when a stream would fall short of it
+        self.get_logger().info(f'scenario {sc.name}: {sc.duration_s} s at {sc.rate_hz} Hz '
+                               f'(run-out {n - sc.n_samples} samples), real-time factor {rtf}')
         chunk: list = []
-        for k in range(sc.n_samples):
+        for k in range(n):
             if stop():
                 break
             tau = (k * sc.dt_ns) / 1e9
             if not chunk:
                 # evaluated CHUNK samples at a time: the wave sums vectorise (same numbers, a fraction of the cost)
-                ks = np.arange(k, min(k + CHUNK, sc.n_samples))
+                ks = np.arange(k, min(k + CHUNK, n))
                 chunk = self.source.samples((ks * sc.dt_ns) / 1e9, sc.t0_ns, sc.dt_ns, k0=k)[::-1]
             s = chunk.pop()
             clk = Clock()
