@@ -41,9 +41,12 @@ from alignment_core.config.given import FOLLOWS, Scope, flatten, nest
 TIMING = ('seed', 'rate_hz', 'start_time_s')
 ORIGIN = ('ship.lat_deg', 'ship.lon_deg')               # the local tangent plane's origin
 DECK_SPOT = ('aircraft.lever_arm_m', 'aircraft.heading_on_deck_deg')
+# the streams' timing, for the ship node's run-out past the end (alignment_core/run_out.py)
+RUN_OUT = ('master.rate_hz', 'master.latency_s', 'master.latency_jitter_s', 'ldv.rate_hz', 'ldv.latency_s',
+           'doppler.enabled', 'doppler.rate_hz', 'doppler.latency_s', 'filter.output_rate_hz')
 
 NODE_SCOPES: dict[str, Scope] = {
-    'ship_motion_node': Scope(('name', 'duration_s', *TIMING, 'ship')),
+    'ship_motion_node': Scope(('name', 'duration_s', *TIMING, 'ship', *RUN_OUT)),
     'master_ins_node': Scope((*TIMING, *ORIGIN, 'master')),
     'slave_ins_node': Scope((*TIMING, *ORIGIN, 'aircraft', 'imu', 'reference_ins')),
     # the deck spot and the catapult give the LDV's origin, heading and track length by default
