@@ -115,8 +115,9 @@ def test_without_truth_the_last_estimate_and_its_sigma(bag):
 
 
 def test_what_comes_after_the_end_is_not_scored(bag):
-    # a graph run's run-out: truth and outputs go on past the end (1.5 s here), the score is the end's
-    s = summary.summarise(bag, bag, 1.0, 0.5, 4.0, dict(PUBLISHED))
-    assert s['complete'] is True and s['sim_time_s'] == 0.5
+    # a graph run's run-out: truth and outputs go on past the end (1.55 s here, off the outputs'
+    # 10 Hz grid: the first output after it, at 1.6 s, completes the run), the score is the end's
+    s = summary.summarise(bag, bag, 1.0, 0.55, 4.0, dict(PUBLISHED))
+    assert s['complete'] is True and s['sim_time_s'] == 0.55
     assert s['scored_at_s'] == pytest.approx(1.5) and s['estimate_stamp_s'] == pytest.approx(1.5)
     assert s['topics']['/alignment/misalignment'] == 21     # recorded all the same

@@ -122,6 +122,7 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     end_ns = round((start_s + duration_s) * 1e9)
     until_ns = end_ns + 1000                   # 1 us: the end given as float seconds
     est = estimates_from_bag(estimate_bag)
+    last_ns = int(est['t_ns'][-1]) if len(est['t_ns']) else None
     n_kept = int(np.searchsorted(est['t_ns'], until_ns, side='right'))   # a graph run's run-out: not scored
     est = {k: v[:n_kept] for k, v in est.items()}
     problems = list(problems or [])
@@ -133,7 +134,6 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     pub = published or {}
     lost = {k: max(0, pub[k] - counts.get(k, 0)) for k in sorted(pub)}
     foreign = {k: n - pub.get(k, 0) for k, n in sorted(own.items()) if pub and n > pub.get(k, 0)}
-    last_ns = int(est['t_ns'][-1]) if len(est['t_ns']) else None
     reached = duration_s
     if last_ns is None or last_ns < end_ns - 1000:      # 1 us: the end given as float seconds
         reached = 0.0 if last_ns is None else max(0.0, last_ns * 1e-9 - start_s)
