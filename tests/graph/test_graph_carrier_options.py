@@ -5,11 +5,8 @@ filter node draws the same survey error from its own parameters): the graph give
 estimates. The beam's direction is rebuilt from the covariance (an eigenvector: the last bits
 and its sign may differ, the projection does not), hence a tolerance, not bit equality.
 
-Not here: a master latency. run_graph ends a run when the filter's outputs reach the end time;
-outputs are emitted at master stamps, so with a master latency the last one falls short of the
-end (the batch's too) and the run waits for its timeout (a limitation of run_graph's end rule,
-left as it is). The master node's jittered stamps are checked against the stage in
-tests/sensors/test_sensor_nodes.py."""
+Not here: a master latency (its run-out past the end: tests/graph/test_graph_run_out.py). The
+master node's jittered stamps are checked against the stage in tests/sensors/test_sensor_nodes.py."""
 from __future__ import annotations
 
 import subprocess
