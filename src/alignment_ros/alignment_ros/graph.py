@@ -3,8 +3,10 @@
 Each node is a separate process started through scripts/start_node.sh with one params file:
 the scenario as given (its file's keys and --set), which each node resolves itself (params.py);
 the resolved scenario is written next to it (scenario.yaml). The ship node starts the clock
-once every subscription is matched. When every stream of END_TOPICS has reached the
-scenario's end, the recorder says so; then the nodes get SIGINT and stop once every subscriber
+once every subscription is matched and runs on past the scenario's end for the run-out
+(alignment_core/run_out.py: a sensor with its own rate, latency or jitter would otherwise stop
+short of the end, and the filter's outputs with it). When every stream of END_TOPICS has
+reached the scenario's end, the recorder says so; then the nodes get SIGINT and stop once every subscriber
 has acknowledged every message they sent; their published counts go to the recorder
 (stats/published.json), which records until it has all of them (no quiet-period guess: on a
 loaded machine a message the transport dropped arrives seconds later, when the reliable
