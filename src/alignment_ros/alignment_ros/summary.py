@@ -3,7 +3,8 @@
 The mounting misalignment is defined while the aircraft rides the deck (/truth/misalignment
 is published only then); the estimate scored is the filter's output at the last such stamp
 (the release, or the end of a deck run), or the latest output before it. Only messages stamped
-up to the scenario's end count (a graph run's run-out after it: alignment_core/run_out.py). A summary says
+up to the scenario's end are scored (a graph run's run-out after it: alignment_core/run_out.py;
+the innovation whiteness is the filter's last report, its run-out's included). A summary says
 whether the run is complete (``complete``, ``problems``): a lost message, a foreign one, a run
 cut short or anything the launcher saw go wrong makes it incomplete (and the exit non-zero).
 
@@ -68,14 +69,12 @@ def state_estimate(bag: Path, at_s: float | None = None) -> dict | None:
     return dict(zip(('t_s', 'labels', 'estimate', 'sigma'), best))
 
 
-def whiteness(bag: Path, until_ns: int | None = None) -> dict | None:
+def whiteness(bag: Path) -> dict | None:
     """The alignment filter's last /diagnostics: its innovation whiteness window (pass / fail,
     Ljung-Box q, dof, p, the largest lag-1 autocorrelation and the white band; estimation/
     whiteness.py) and where the relative velocity came from; None before a completed window."""
     last = None
     for m in _read(bag, (topics.DIAGNOSTICS,))[topics.DIAGNOSTICS]:
-        if until_ns is not None and to_ns(m.header.stamp) > until_ns:
-            break
         for st in m.status:
             if st.name == 'alignment_filter':
                 last = {kv.key: kv.value for kv in st.values}
@@ -150,7 +149,7 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
         **score,
         **({} if truth else {'truth': False}),     # the key only where there is none
         'state_estimate': state_estimate(estimate_bag, score.get('scored_at_s')),
-        'innovation_whiteness': whiteness(estimate_bag, until_ns),
+        'innovation_whiteness': whiteness(estimate_bag),
         'air_data': air,
         'sim_time_s': reached,
         'planned_sim_time_s': duration_s,
