@@ -2,7 +2,7 @@
 level or inside functions, absolute or relative):
 
 - layering: geometry, navigation and estimation never import the simulator (ship, aircraft,
-  sensors, config, pipeline, evaluation); nor do the foundation modules (units, validation,
+  sensors, config, pipeline, run_out, evaluation); nor do the foundation modules (units, validation,
   gauss_markov, rng, samples); geometry imports neither navigation nor estimation, navigation
   not estimation; recorded (logs in) neither the simulator nor navigation and estimation;
   air_data (atmosphere, pitot, ports, FADS solve: shared by the simulator and the estimator,
@@ -24,7 +24,7 @@ from pathlib import Path
 CORE = Path(__file__).resolve().parents[1] / 'src/alignment_core/alignment_core'
 PACKAGE = 'alignment_core'
 
-SIMULATOR = ('ship', 'aircraft', 'sensors', 'config', 'pipeline', 'evaluation')
+SIMULATOR = ('ship', 'aircraft', 'sensors', 'config', 'pipeline', 'run_out', 'evaluation')
 FOUNDATION = ('units', 'validation', 'gauss_markov', 'rng', 'samples')
 # first component under alignment_core -> the components it must never import
 FORBIDDEN: dict[str, tuple[str, ...]] = {
