@@ -43,8 +43,10 @@ def test_a_vertical_beam_loses_the_heading():
 
 def test_a_beam_sample_for_a_vector_filter_is_rejected_and_counted():
     """filter.ldv_mode given as vector against a beam LDV: its samples would be read as full
-    velocity vectors (wrong); they are rejected as `ldv_mode`, nothing is matched."""
-    sc = scenario.load('deck', {'duration_s': 2.0, 'ldv.mode': 'beam', 'filter.ldv_mode': 'vector'})
+    velocity vectors (wrong); they are rejected as `ldv_mode`, nothing is matched (relative velocity
+    `ldv`: under `auto` a stream with no usable sample is taken as absent and matched as parked)."""
+    sc = scenario.load('deck', {'duration_s': 2.0, 'ldv.mode': 'beam', 'filter.ldv_mode': 'vector',
+                                'filter.relative_velocity': 'ldv'})
     res = pipeline.run(sc, keep_truth=False)
     c = res.filter.counters
     assert c.rejected_ldv_mode == 201 and c.ldv == 0 and c.updates == 0
