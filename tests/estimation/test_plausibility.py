@@ -112,9 +112,30 @@ def test_a_stream_resuming_after_a_silence_is_not_an_outlier():
     for k in range(2, 8):
         _feed(gate, 'imu', k * s)
         _feed(gate, 'ldv', k * s)
-    assert gate.silent() == ('master',)                              # 6 s behind: silent
+    assert gate.waiting_for() == ('master',)                         # nothing for 6 s of stamps
     assert _feed(gate, 'master', 7 * s) and c.rejected_future_stamp == 0
-    assert gate.silent() == ()
+    assert gate.waiting_for() == ()
+
+
+def test_a_stream_that_lags_on_arrival_but_keeps_delivering_is_not_waited_for():
+    """The LDV arrives 3 s of stamps behind the IMU (more than silence_warn_s) at every step:
+    it is behind, not silent. One that stops delivering is waited for once the others ran more
+    than silence_warn_s (1 s) of stamps past its last arrival."""
+    gate, _ = _gate()
+    ms = 1_000_000
+    for k in range(1, 600):
+        _feed(gate, 'imu', k * 10 * ms)
+        _feed(gate, 'master', k * 10 * ms)
+        if k > 300:
+            _feed(gate, 'ldv', (k - 300) * 10 * ms)
+        if k > 300:
+            assert gate.waiting_for() == ()
+    for k in range(600, 700):
+        _feed(gate, 'imu', k * 10 * ms)
+        _feed(gate, 'master', k * 10 * ms)
+    assert gate.waiting_for() == ()                                 # 1.0 s of stamps: not yet
+    _feed(gate, 'imu', 700 * 10 * ms)
+    assert gate.waiting_for() == ('ldv',)
 
 
 def test_the_lead_allowed_grows_by_the_known_latencies():

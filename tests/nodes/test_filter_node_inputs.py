@@ -74,3 +74,32 @@ def test_odometry_message_per_rep_105(inp):
     # 1 s into the 2 g stroke the aircraft moves along its x axis (the ship's bow) at the ship's
     # 10 kn plus 2 g * 1 s relative to the deck (the sea state's surge and the lever arm: ~1 %)
     assert e.v_b[0] == pytest.approx(10.0 * KNOT + 2.0 * G0 * 1.0, rel=0.02)
+
+
+def test_a_stalled_ldv_is_reported_as_waited_for_only_when_it_stalls_on_the_clock_too(inp):
+    """The LDV stops delivering after 0.5 s while the IMU and master run on to 2.5 s: the engine
+    waits for it (more than silence_warn_s of their stamps). At a fast replay's pace (1 ms of
+    wall time per sample) that is no stall and nothing is reported; once it has also delivered
+    nothing for 1 s on the clock, WARN 'waiting_ldv' ('waiting for ldv'); its next sample ends it."""
+    now = [0.0]
+    f = FilterInputs(TransferAlignment(SC.filter, pipeline.plane_of(SC), SC.rate_hz), 1.0, clock=lambda: now[0])
+    t0 = inp.imu[0].t_ns
+    ldv = [s for s in inp.ldv if s.t_ns <= t0 + 500_000_000]
+    j_ldv = j_m = 0
+    for s in inp.imu[:250]:
+        now[0] += 1e-3
+        assert f.imu(convert.imu_to_msg(s, 0.0, 0.0)) == ''
+        while j_ldv < len(ldv) and ldv[j_ldv].t_ns <= s.t_ns:
+            assert f.ldv(convert.ldv_to_msg(ldv[j_ldv])) == ''
+            j_ldv += 1
+        while j_m < len(inp.master) and inp.master[j_m].t_ns <= s.t_ns:
+            assert f.master(convert.master_to_msg(inp.master[j_m])) == ''
+            j_m += 1
+    assert f.engine.waiting_for() == ('ldv',)
+    assert f.waiting_for() == () and f.status() == (OK, ())
+    now[0] += 1.0
+    assert f.imu(convert.imu_to_msg(inp.imu[250], 0.0, 0.0)) == ''
+    assert f.waiting_for() == ('ldv',) and f.status() == (WARN, ('waiting_ldv',))
+    assert f.message(f.engine.report()).endswith('; waiting for ldv')
+    assert f.ldv(convert.ldv_to_msg(inp.ldv[len(ldv)])) == ''
+    assert f.waiting_for() == () and f.status() == (OK, ())

@@ -12,6 +12,8 @@ whenever the level or its reasons change (a master or LDV that falls silent: WAR
 from __future__ import annotations
 
 import dataclasses
+import time
+from collections.abc import Callable
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -23,7 +25,7 @@ from std_msgs.msg import Float64MultiArray
 from alignment_core import pipeline
 from alignment_core.estimation.engine import TransferAlignment
 from alignment_core.estimation.health import ERROR, WARN
-from alignment_core.estimation.outputs import Diagnostics, Estimate
+from alignment_core.estimation.outputs import Diagnostics, Estimate, Report
 from alignment_ros import convert, node_util, qos, topics
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
@@ -32,24 +34,32 @@ LEVELS = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR)
 
 class FilterInputs:
     """Messages into the engine: the frame check, the conversion, the push. Each call returns ''
-    if the message was taken, else the reason it was rejected ('frame_id' or the engine's)."""
+    if the message was taken, else the reason it was rejected ('frame_id' or the engine's).
+    wall_silence_s > 0: a stream the engine waits for is only reported while it has also
+    delivered nothing for that long on `clock` (a stall, not a scheduling hiccup of a fast run)."""
 
-    def __init__(self, engine: TransferAlignment) -> None:
+    def __init__(self, engine: TransferAlignment, wall_silence_s: float = 0.0,
+                 clock: Callable[[], float] = time.monotonic) -> None:
         self.engine = engine
         self.rejected_frame_id = 0
+        self._wall_silence_s = wall_silence_s
+        self._clock = clock
+        self._delivered: dict[str, float] = {}          # stream -> clock time of its last sample taken
+        self._first_taken: float | None = None
 
     def imu(self, m: Imu) -> str:
-        return self._take(topics.AIRCRAFT_IMU, m) or self._pushed(self.engine.push_imu(convert.msg_to_imu(m)))
+        return self._take(topics.AIRCRAFT_IMU, m) or self._pushed(self.engine.push_imu(convert.msg_to_imu(m)), 'imu')
 
     def master(self, m: Odometry) -> str:
-        return self._take(topics.MASTER_ODOM, m) or self._pushed(self.engine.push_master(convert.msg_to_master(m)))
+        return self._take(topics.MASTER_ODOM, m) or self._pushed(
+            self.engine.push_master(convert.msg_to_master(m)), 'master')
 
     def ldv(self, m: TwistWithCovarianceStamped) -> str:
-        return self._take(topics.LDV_TWIST, m) or self._pushed(self.engine.push_ldv(convert.msg_to_ldv(m)))
+        return self._take(topics.LDV_TWIST, m) or self._pushed(self.engine.push_ldv(convert.msg_to_ldv(m)), 'ldv')
 
     def doppler(self, m: TwistWithCovarianceStamped) -> str:
         return self._take(topics.DOPPLER_TWIST, m) or self._pushed(
-            self.engine.push_doppler(convert.msg_to_doppler(m)))
+            self.engine.push_doppler(convert.msg_to_doppler(m)), 'doppler')
 
     def _take(self, topic: str, m) -> str:
         if convert.frame_mismatch(m, *topics.INPUT_FRAMES[topic]):
@@ -57,21 +67,42 @@ class FilterInputs:
             return 'frame_id'
         return ''
 
-    def _pushed(self, ok: bool) -> str:
+    def _pushed(self, ok: bool, stream: str = '') -> str:
+        if ok and stream:
+            self._delivered[stream] = self._clock()
+            if self._first_taken is None:
+                self._first_taken = self._delivered[stream]
         return '' if ok else self.engine.last_rejection or 'rejected'
 
-    def status(self) -> tuple[int, tuple[str, ...]]:
-        """The engine's (level, flags), WARN and 'frame_id' once a message in a wrong frame came."""
-        level, flags = self.engine.status()
+    def waiting_for(self) -> tuple[str, ...]:
+        """The master or LDV the engine waits for (engine.waiting_for: silent for silence_warn_s
+        of the other streams' stamps), silent for wall_silence_s on the clock too."""
+        now, start = self._clock(), self._first_taken
+        return tuple(k for k in self.engine.waiting_for() if start is None
+                     or now - self._delivered.get(k, start) > self._wall_silence_s)
+
+    def status(self, report: Report | None = None) -> tuple[int, tuple[str, ...]]:
+        """The (level, flags) of the engine's report (the given one, an output's, or as of the
+        stamps processed so far); WARN and 'waiting_<stream>' while the stamp order waits for a
+        master or LDV that delivers nothing (arrival liveness); WARN and 'frame_id' once a message
+        in a wrong frame came."""
+        level, flags = (report.level, report.flags) if report is not None else self.engine.status()
+        waiting = self.waiting_for()
+        if waiting:
+            level, flags = max(level, WARN), (*flags, *(f'waiting_{k}' for k in waiting))
         if self.rejected_frame_id:
             return max(level, WARN), (*flags, 'frame_id')
         return level, flags
 
-    def message(self, d: Diagnostics) -> str:
-        """The engine's diagnostics message, with the wrong-frame rejections."""
-        if not self.rejected_frame_id:
-            return d.message
-        return f'{d.message}; {self.rejected_frame_id} messages in a wrong frame rejected'
+    def message(self, report: Report | Diagnostics) -> str:
+        """The report's message, with what the node waits for and the wrong-frame rejections."""
+        text = report.message
+        waiting = self.waiting_for()
+        if waiting:
+            text += f"; waiting for {', '.join(waiting)}"
+        if self.rejected_frame_id:
+            text += f'; {self.rejected_frame_id} messages in a wrong frame rejected'
+        return text
 
 
 class AlignmentFilterNode(node_util.CountingNode):
@@ -80,7 +111,7 @@ class AlignmentFilterNode(node_util.CountingNode):
         self.sc = ScenarioParameters(self, NODE_SCOPES['alignment_filter_node']).scenario
         self.plane = pipeline.plane_of(self.sc)
         self.engine = TransferAlignment(self.sc.filter, self.plane, self.sc.rate_hz, keep_history=False)
-        self.inputs = FilterInputs(self.engine)
+        self.inputs = FilterInputs(self.engine, self.sc.filter.silence_warn_s)
         self.stream_publisher(Vector3Stamped, topics.ALIGN_MISALIGNMENT)
         self.stream_publisher(PoseWithCovarianceStamped, topics.ALIGN_ATTITUDE)
         self.stream_publisher(Float64MultiArray, topics.ALIGN_STATE)
@@ -130,20 +161,29 @@ class AlignmentFilterNode(node_util.CountingNode):
             if self.n_out % 10 == 0 or self._changed():
                 self._send_diagnostics(e.t_ns)
             self.n_out += 1
-        if not estimates and self._changed():     # e.g. a stream fell silent, a message in a wrong frame
+        if not estimates and self._changed():     # e.g. waiting for a silent stream, a message in a wrong frame
             self._send_diagnostics(t_ns if self.last is None else max(t_ns, self.last.t_ns))
 
     def _position(self) -> np.ndarray:
         nav = self.engine.solution
         return np.zeros(3) if nav is None else self.plane.from_geodetic(nav.lat, nav.lon, nav.h)
 
+    def _report(self) -> Report:
+        """The report of the last output (a function of the stamps processed up to it, so the
+        graph and a replay say the same); before the first output, as of the stamps processed."""
+        e = self.last
+        if e is not None and e.report is not None:
+            return e.report
+        return self.engine.report()
+
     def _changed(self) -> bool:
-        return self.inputs.status() != self.reported
+        return self.inputs.status(self._report()) != self.reported
 
     def _send_diagnostics(self, t_ns: int) -> None:
         d = self.engine.diagnostics()
-        level, flags = self.inputs.status()
-        text = self.inputs.message(d)
+        report = self._report()
+        level, flags = self.inputs.status(report)
+        text = self.inputs.message(report)
         if level == ERROR and self.reported[0] < ERROR:
             self.get_logger().error(text)
         elif (level, flags) != self.reported and flags:
@@ -166,7 +206,8 @@ class AlignmentFilterNode(node_util.CountingNode):
             'imu': c.imu, 'master': c.master, 'ldv': c.ldv, 'doppler': c.doppler,
             'doppler_updates': c.doppler_updates, 'unmatched_master': c.unmatched_master,
             'numerical_failures': c.numerical_failures, 'healthy': str(d.healthy).lower(),
-            'flags': ' '.join(flags), 'silent': ' '.join(d.silent), 'held': str(
+            'flags': ' '.join(flags), 'silent': ' '.join(f[:-len('_silent')] for f in flags if f.endswith('_silent')),
+            'waiting': ' '.join(self.inputs.waiting_for()), 'held': str(
                 e is not None and 'held' in e.flags).lower(),
             **{k: f'{v:.4g}' if isinstance(v, float) else v for k, v in d.consistency.items()},
             **{k: f'{v:.4g}' if isinstance(v, float) else v for k, v in d.whiteness.items()},

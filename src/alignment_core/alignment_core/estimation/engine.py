@@ -6,15 +6,12 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import replace
-from typing import cast
 
 import numpy as np
 
 from alignment_core.estimation import status
 from alignment_core.estimation.anchoring import (
-    bridge_covariance,
     carried_attitude,
-    dead_reckoned,
     reset_velocity,
     slave_from_master,
 )
@@ -22,21 +19,20 @@ from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.consistency import NisMonitor
 from alignment_core.estimation.engine_views import EngineViews
 from alignment_core.estimation.filter_factory import make_filter
-from alignment_core.estimation.filters.base import NonlinearFilter
-from alignment_core.estimation.health import BREAKDOWN_ERRORS, ERROR, WARN
+from alignment_core.estimation.health import BREAKDOWN_ERRORS
+from alignment_core.estimation.imu_events import ImuEvents
+from alignment_core.estimation.input_streams import InputStreams
 from alignment_core.estimation.launch_detection import LaunchDetector, LaunchThresholds
 from alignment_core.estimation.matching import LiveSolution, Matcher, Reference
-from alignment_core.estimation.models import Propagation, make_model
+from alignment_core.estimation.models import make_model
 from alignment_core.estimation.models.base import DV
 from alignment_core.estimation.models.beam import track_velocity
 from alignment_core.estimation.outputs import Counters, Estimate
-from alignment_core.estimation.plausibility import InputGate
 from alignment_core.estimation.publication import EstimateMaker, OdometryMaker, PublishGuard, prior_estimate
 from alignment_core.estimation.relative_velocity import ABSENT, LDV, RelativeVelocity
 from alignment_core.estimation.whiteness import InnovationWhiteness
 from alignment_core.geometry import earth
 from alignment_core.navigation.history import LdvHistory, LdvRecord, SlaveHistory
-from alignment_core.navigation.ordering import StampMerger
 from alignment_core.samples import DopplerSample, ImuSample, LdvSample, MasterSample
 from alignment_core.units import DEG
 
@@ -44,7 +40,7 @@ STREAMS = ('imu', 'ldv', 'master')
 DOPPLER_STREAMS = ('imu', 'ldv', 'doppler', 'master')   # seed001_13: the Doppler radar too
 
 
-class TransferAlignment(EngineViews):
+class TransferAlignment(ImuEvents, EngineViews):
     """Stamp-ordered transfer-alignment estimator: push samples, call `process`, read `outputs`
     (the read-only views: engine_views.py)."""
 
@@ -60,10 +56,8 @@ class TransferAlignment(EngineViews):
         streams: tuple[str, ...] = DOPPLER_STREAMS if self._model.uses_doppler else STREAMS
         if not self._rel.takes_ldv:
             streams = tuple(k for k in streams if k != 'ldv')
-        self._first_ns: int | None = None          # the first stamp queued (LDV silence)
-        self._merger = StampMerger(streams)
         self._counters = Counters()
-        self._gate = InputGate(cfg, self._counters, streams)
+        self._inputs = InputStreams(cfg, self._counters, streams)
         self._imu_rate_hz = imu_rate_hz
         self._imu_dt_nominal = 1.0 / imu_rate_hz
         self._imu_dt_ns = int(round(1e9 / imu_rate_hz))
@@ -132,24 +126,14 @@ class TransferAlignment(EngineViews):
     def _push(self, stream: str, s) -> bool:
         """Queue a sample unless it is implausible (plausibility.py) or not after its stream's
         previous stamp; a rejection is counted by reason (`last_rejection`)."""
-        item = self._gate.check(stream, s)
-        if item is None:
-            return False
-        if not self._merger.push(stream, s.t_ns, item):
-            self._gate.reject_out_of_order()
-            return False
-        self._gate.accepted(stream, s.t_ns)
-        if self._first_ns is None:
-            self._first_ns = s.t_ns
-        return True
+        return self._inputs.push(stream, s)
 
     def process(self, final: bool = False) -> list[Estimate]:
         """Run every event up to the watermark (all of them if final); return the new outputs as
         published (`published`: the same as `outputs` while the estimates are good)."""
         n0 = len(self._outputs)
         self._check_ldv(final)
-        events = self._merger.flush() if final else self._merger.pop_ready()
-        for stream, t, item in events:
+        for stream, t, item in self._inputs.events(final):
             if stream == 'imu':
                 self._on_imu(t, item)
             elif stream == 'ldv':
@@ -171,11 +155,11 @@ class TransferAlignment(EngineViews):
     def _check_ldv(self, final: bool) -> None:
         """Stop waiting for an LDV that is silent or absent (relative_velocity.py)."""
         rel = self._rel
-        if rel.mode != LDV or not rel.silent(self._merger.last, self._first_ns, final):
+        inputs = self._inputs
+        if rel.mode != LDV or not rel.silent(inputs.merger.last, inputs.gate.quiet_since('ldv'), final):
             return
-        self._merger.drop('ldv')
+        self._inputs.stop_waiting('ldv', absent=rel.mode == ABSENT)
         if rel.mode == ABSENT:
-            self._gate.forget('ldv')
             self._matcher.use_rigid_noise()
         self._match_pending()
 
@@ -183,113 +167,7 @@ class TransferAlignment(EngineViews):
         p0 = self._model.initial_covariance()
         return prior_estimate(e, np.full(3, self._cfg.init_attitude_sigma_deg * DEG), p0, self._model.attitude)
 
-    def _fail(self, why: str) -> None:
-        """Stop filtering after a breakdown: keep the last good estimate (published with
-        healthy=False) and let the slave run free inertial."""
-        self._counters.numerical_failures += 1
-        if self._health.running:
-            self._health.running = False
-            self._health.failure = why
-            self._matching = False
-
-    # ----- events -----
-    def _on_imu(self, t: int, s: ImuSample) -> None:
-        self._counters.imu += 1
-        if self._launch.t_launch_ns is None:            # the launch detector feels the stroke
-            h = self._imu_dt_nominal if self._t_imu is None else (t - self._t_imu) * 1e-9
-            self._launch.observe_imu(t, float(s.accel[0]), h)
-        self._t_imu = t
-        live = self._live
-        if live is None or self._anchor_from is not None:
-            self._buffer_imu(t, s)
-            if live is not None:
-                self._match_pending()
-            return
-        if t <= live.t_ns:
-            self._counters.skipped_before_init += 1
-            return
-        if t - live.t_ns > self._bridge_ns:
-            self._bridge(live, t)
-            if self._anchor_from is not None:
-                self._buffer_imu(t, s)
-                self._match_pending()
-                return
-        self._propagate(live, t, s)
-        if self._pending:
-            self._match_pending()
-
-    def _buffer_imu(self, t: int, s: ImuSample) -> None:
-        """Keep the IMU sample for the (re-)anchoring master; drop those older than the span."""
-        self._imu_buffer.append(s)
-        while self._imu_buffer and self._imu_buffer[0].t_ns < t - self._span_ns:
-            self._imu_buffer.popleft()
-            self._counters.skipped_before_init += 1
-
-    def _propagate(self, live: LiveSolution, t: int, s: ImuSample) -> None:
-        """The strapdown over the IMU interval ending at t, then the filter's predict."""
-        h = (t - live.t_ns) * 1e-9
-        if h > self._cfg.max_gap_factor * self._imu_dt_nominal:
-            self._counters.imu_gaps += 1
-        corr = self._results.corr
-        dth = (s.gyro - corr.bg) * h
-        dv = (s.accel - corr.ba) * h
-        ins = live.ins
-        snap = live.history.record(live.t_ns, ins.s)
-        v_start = ins.s.v_n
-        f_n = ins.update(dth, dv, h)
-        st = ins.s
-        if self._track_intervals:
-            self._matcher.record_interval(t, h, s.gyro, st.v_n - v_start)
-        live.t_ns = t
-        live.gyro = s.gyro
-        live.history.prune(t - self._span_ns, t)
-        if not self._health.running:
-            return
-        p = live.prop = Propagation(ins.c_start, f_n, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
-        qd = self._model.process_noise(h)
-        t_launch = self._launch.t_launch_ns
-        if self._q_launch is not None and t_launch is not None and t - t_launch <= self._launch_ns \
-                and t > t_launch:
-            qd = qd + self._q_launch * h
-        try:
-            if self._model.nonlinear:
-                fun, jac = self._model.propagator(p)
-                cast(NonlinearFilter, live.kf).predict_nonlinear(fun, qd, jac)
-            else:
-                phi = self._model.transition(p)
-                snap.phi = phi
-                live.kf.predict(phi, qd)
-        except (np.linalg.LinAlgError, FloatingPointError, ValueError) as e:
-            self._fail(f'predict: {e}')
-
-    def _bridge(self, live: LiveSolution, t: int) -> None:
-        """An IMU gap longer than gap_bridge_factor intervals is never one strapdown step: the
-        filter's covariance is propagated over the time without data, the solution flagged 'gap'
-        (ERROR beyond gap_error_s) until a NIS window after it passes. Parked on the deck, the
-        slave is then carried across by the master (anchoring.py) at the first master sample
-        from the next sample's interval on; moving, it dead-reckons across at its velocity."""
-        start = t - self._imu_dt_ns                   # the next sample covers (start, t]
-        gap = max(start - live.t_ns, 0) * 1e-9
-        self._counters.imu_gaps += 1
-        self._counters.bridged_gaps += 1
-        hl = self._health
-        hl.gap_level = max(hl.gap_level, ERROR if gap > self._cfg.gap_error_s else WARN)
-        hl.gap_s, hl.recover_mark = gap, self._monitor.completed
-        self._monitor.restart()
-        self._whiteness.restart()
-        self._matcher.restart(self._imu_rate_hz)
-        if hl.running:
-            try:
-                bridge_covariance(live.kf, self._model, live.prop, gap)
-            except BREAKDOWN_ERRORS as e:
-                self._fail(f'predict: {e}')
-        live.history = SlaveHistory(self._span_ns)
-        if not self._launch.moving and hl.running:
-            self._anchor_from = start
-            return
-        live.ins.s = dead_reckoned(live.ins.s, gap)
-        live.t_ns = start
-
+    # ----- events (the IMU's: imu_events.py) -----
     def _on_ldv(self, t: int, s: LdvSample) -> None:
         """The launch detector decides which samples to record now (none while it holds a fast
         run back: the master matches wait); a launch it confirms puts the launch noise of the IMU
@@ -454,5 +332,6 @@ class TransferAlignment(EngineViews):
             self._fail('covariance not finite at the output')
         level, flags = status.with_lag(*status.level_and_flags(self._health, self._monitor), t - live.t_ns,
                                        self._bridge_ns, int(self._cfg.gap_error_s * 1e9))
-        self._outputs.append(self._maker.make(t, live, self._results, self._counters.updates, self._matching,
-                                              level, flags))
+        e = self._maker.make(t, live, self._results, self._counters.updates, self._matching, level, flags)
+        e.report = self.report(level, flags)
+        self._outputs.append(e)

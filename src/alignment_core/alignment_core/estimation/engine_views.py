@@ -9,16 +9,15 @@ import numpy as np
 
 from alignment_core.estimation import status
 from alignment_core.estimation.consistency import NisMonitor
-from alignment_core.estimation.health import ERROR, WARN
+from alignment_core.estimation.health import ERROR
+from alignment_core.estimation.input_streams import InputStreams
 from alignment_core.estimation.launch_detection import LaunchDetector
 from alignment_core.estimation.matching import LiveSolution, MatchResults
 from alignment_core.estimation.models import Corrections, ErrorModel
-from alignment_core.estimation.outputs import Counters, DeckMotion, Diagnostics, Estimate
-from alignment_core.estimation.plausibility import InputGate
+from alignment_core.estimation.outputs import Counters, DeckMotion, Diagnostics, Estimate, Report
 from alignment_core.estimation.publication import EstimateMaker
 from alignment_core.estimation.relative_velocity import RelativeVelocity
 from alignment_core.estimation.whiteness import InnovationWhiteness
-from alignment_core.navigation.ordering import StampMerger
 from alignment_core.navigation.strapdown import NavState
 
 
@@ -27,12 +26,11 @@ class EngineViews:
     _outputs: list[Estimate]
     _published: list[Estimate]
     _counters: Counters
-    _gate: InputGate
+    _inputs: InputStreams
     _maker: EstimateMaker
     _live: LiveSolution | None
     _health: status.Health
     _monitor: NisMonitor
-    _merger: StampMerger
     _matching: bool
     _results: MatchResults
     _launch: LaunchDetector
@@ -64,19 +62,27 @@ class EngineViews:
     @property
     def last_rejection(self) -> str:
         """Why the last sample pushed was rejected ('' if it was accepted)."""
-        return self._gate.last_rejection
+        return self._inputs.last_rejection
+
+    def report(self, level: int | None = None, flags: tuple[str, ...] = ()) -> Report:
+        """The /diagnostics status as of the stamps processed so far (status.py): the estimates'
+        (breakdown, inconsistent, gap; or the given level and flags), WARN for a silent master or
+        LDV and for any input trouble so far (input_streams.py), and its message."""
+        if level is None:
+            level, flags = status.level_and_flags(self._health, self._monitor)
+        trouble = status.input_trouble(self._counters, self._inputs.rejections)
+        return status.report(level, flags, self._health, self._monitor, self._matching, self._inputs.silent(),
+                             trouble, self.relative_velocity)
 
     def status(self) -> tuple[int, tuple[str, ...]]:
-        """(level, flags) now: the estimates' (breakdown, inconsistent, gap), WARN for a silent
-        master or LDV ('master_silent', 'ldv_silent') and for any input trouble so far."""
-        level, flags = status.level_and_flags(self._health, self._monitor)
-        silent = self._gate.silent()
-        if silent:
-            level = max(level, WARN)
-            flags += tuple(f'{k}_silent' for k in silent)
-        if status.input_trouble(self._counters):
-            level = max(level, WARN)
-        return level, flags
+        """(level, flags) as of the stamps processed so far (report())."""
+        r = self.report()
+        return r.level, r.flags
+
+    def waiting_for(self) -> tuple[str, ...]:
+        """The master or LDV the stamp order waits for that has delivered nothing while the other
+        streams ran silence_warn_s (arrival liveness: what a node is waiting for now)."""
+        return self._inputs.waiting_for()
 
     def diagnostics(self) -> Diagnostics:
         """The filter's diagnostics as of the last output, the status now, failure, message and
@@ -85,12 +91,9 @@ class EngineViews:
             filt = dict(self._maker.held[2])
         else:
             filt = {} if self._live is None else self._live.kf.diagnostics()
-        level, flags = self.status()
-        silent = self._gate.silent()
-        text = status.message(level, self._health, self._monitor, self._matching, silent)
-        if self._rel.mode != 'ldv':
-            text += f'; relative velocity {self.relative_velocity}'
-        return Diagnostics(filt, self.healthy, self.failure, self._merger.pending(), level, flags, text, silent,
+        r = self.report()
+        return Diagnostics(filt, self.healthy, self.failure, self._inputs.pending(), r.level, r.flags, r.message,
+                           self._inputs.silent(),
                            self._monitor.summary(), self.relative_velocity, self._whiteness.summary())
 
     @property

@@ -8,6 +8,15 @@ from typing import Any
 import numpy as np
 
 
+@dataclass(frozen=True)
+class Report:
+    """What /diagnostics says at an output: level, flags and one line, from the stamps processed
+    up to it (so the graph and the batch say the same; estimation/status.py)."""
+    level: int = 0
+    flags: tuple[str, ...] = ()
+    message: str = ''
+
+
 @dataclass
 class Estimate:
     """One output of the filter at a master stamp."""
@@ -36,6 +45,7 @@ class Estimate:
     # the accumulated estimate of every state (state_estimate.py; labels: the engine's state_labels),
     # SI, its 1-sigma is `sigma`; None: not computed
     state: np.ndarray | None = None   # (n,)
+    report: Report | None = None      # what /diagnostics says at this output (set by the engine)
 
 
 @dataclass
@@ -81,7 +91,7 @@ class Diagnostics:
     level: int = 0                    # health.OK / WARN / ERROR now (the outputs' and the inputs')
     flags: tuple[str, ...] = ()       # what made it WARN or ERROR
     message: str = ''                 # one line for /diagnostics
-    silent: tuple[str, ...] = ()      # streams that fell silent (arrival stamps)
+    silent: tuple[str, ...] = ()      # master or LDV silent (the stamps processed: input_streams.py)
     consistency: dict[str, Any] = field(default_factory=dict)   # the NIS monitor's last window
     relative_velocity: str = 'ldv'    # where the relative velocity comes from (relative_velocity.py)
     whiteness: dict[str, Any] = field(default_factory=dict)     # the whiteness test's last window

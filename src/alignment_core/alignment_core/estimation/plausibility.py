@@ -112,6 +112,8 @@ class InputGate:
         self.limits = Limits.of(cfg)
         self._counters = counters
         self._latest: dict[str, int | None] = {k: None for k in streams}
+        self._newest: int | None = None          # the newest stamp taken, of any stream
+        self._newest_then: dict[str, int | None] = {k: None for k in streams}   # ... when each last delivered
         self._first: int | None = None
         self.last_rejection = ''          # why the last sample was rejected ('' if accepted)
 
@@ -147,6 +149,9 @@ class InputGate:
         self._latest[stream] = t_ns
         if self._first is None:
             self._first = t_ns
+        if self._newest is None or t_ns > self._newest:
+            self._newest = t_ns
+        self._newest_then[stream] = self._newest
 
     def _future(self, stream: str, t_ns: int) -> bool:
         prev = self._latest[stream]
@@ -160,18 +165,26 @@ class InputGate:
         """A stream the run does not have (no LDV): never reported silent."""
         self._latest.pop(stream, None)
 
-    def silent(self, streams: tuple[str, ...] = ('master', 'ldv')) -> tuple[str, ...]:
-        """The streams whose latest stamp lags the newest of any stream by more than silence_ns
-        (or that never delivered while the others ran that long)."""
-        if self._first is None:
+    def quiet_since(self, stream: str) -> int | None:
+        """The newest stamp of any stream when `stream` last delivered (the first stamp of any
+        stream if it never did; None before any): how far the others ran since is its silence,
+        however far behind the others its own stamps arrive."""
+        then = self._newest_then.get(stream)
+        return self._first if then is None else then
+
+    def waiting_for(self, streams: tuple[str, ...] = ('master', 'ldv')) -> tuple[str, ...]:
+        """Arrival liveness (for a node to say what it waits for; not a function of the stamps
+        alone): the streams that delivered nothing while the newest stamp of any stream advanced
+        by more than silence_ns (or that never delivered while the others ran that long). A
+        stream that runs behind the others but keeps delivering is not one of them."""
+        if self._newest is None or self._first is None:
             return ()
-        newest = max(v for v in self._latest.values() if v is not None)
         lim = self.limits.silence_ns
         out = []
         for k in streams:
             if k not in self._latest:
                 continue
-            last = self._latest[k]
-            if newest - (self._first if last is None else last) > lim:
+            since = self.quiet_since(k)
+            if since is not None and self._newest - since > lim:
                 out.append(k)
         return tuple(out)

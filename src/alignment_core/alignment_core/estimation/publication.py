@@ -164,7 +164,7 @@ class PublishGuard:
         held = self.last_good if self.last_good is not None else prior(e)
         why = e.flags if good else (*e.flags, 'absurd')
         return dataclasses.replace(held, t_ns=e.t_ns, level=ERROR, healthy=False, matching=False,
-                                   updates=e.updates, flags=tuple(dict.fromkeys((*why, 'held'))))
+                                   updates=e.updates, flags=tuple(dict.fromkeys((*why, 'held'))), report=e.report)
 
 
 def prior_estimate(e: Estimate, mu_sigma: np.ndarray, p0: np.ndarray, att: slice) -> Estimate:

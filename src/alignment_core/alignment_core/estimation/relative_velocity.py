@@ -3,10 +3,13 @@ docs/engine.md): the LDV (`ldv`), or nothing because the slave is rigidly tied t
 body (`zero`: relative velocity zero with white noise `rigid_velocity_sigma_mps`), or the LDV
 while there is one (`auto`, the default).
 
-Absence and silence are decided on stamps, never on arrival times, so the graph and the batch
-agree: the LDV stream is silent when the IMU and the master (the least advanced of them) have
-both run `ldv_silence_s` past its last stamp, or past the first stamp of any stream when no
-LDV sample came at all. The engine then stops waiting for it (it never stalls on an LDV):
+Absence and silence are decided on stamps: the LDV stream is silent when the IMU and the
+master (the least advanced of them) have both run `ldv_silence_s` past the newest stamp of any
+stream when the LDV last delivered (its last stamp when it arrives in step with the others), or
+past the first stamp of any stream when no LDV sample came at all. An LDV that runs behind the
+others on arrival but keeps delivering is never taken for silent, so the graph and the batch
+agree; and since processing waits for the LDV until then, when it is declared silent does not
+change what is processed. The engine then stops waiting for it (it never stalls on an LDV):
 - no LDV sample ever, under `auto`: relative velocity zero for the whole run ('zero (no LDV
   stream)'; nothing was processed before, the engine waited for the stream);
 - an LDV that fell silent mid-run: matches after its last sample are made as parked (zero
@@ -42,19 +45,20 @@ class RelativeVelocity:
         """Every match is made with zero relative velocity and the rigid-mount noise."""
         return self.mode in (ZERO, ABSENT)
 
-    def silent(self, last: dict[str, int | None], first_ns: int | None, final: bool = False) -> bool:
+    def silent(self, last: dict[str, int | None], quiet_since_ns: int | None, final: bool = False) -> bool:
         """True (once) when the LDV stream is to be declared silent: the IMU and master stamps
-        `last` have both run ldv_silence_s past the LDV's last stamp (or past first_ns); at the
-        end of the data (final), under `auto`, when no LDV sample came at all."""
-        if self.mode != LDV or first_ns is None:
+        `last` (their latest; `last['ldv']` the LDV's) have both run ldv_silence_s past
+        quiet_since_ns (the newest stamp of any stream when the LDV last delivered, or the first
+        stamp if it never did); at the end of the data (final), under `auto`, when no LDV sample
+        came at all."""
+        if self.mode != LDV or quiet_since_ns is None:
             return False
         others = [last.get('imu'), last.get('master')]
         if any(t is None for t in others):
             return False
         ref = last.get('ldv')
-        ref_ns = first_ns if ref is None else ref
         ended = final and ref is None and self.option == 'auto'
-        if not ended and min(t for t in others if t is not None) - ref_ns <= self._silence_ns:
+        if not ended and min(t for t in others if t is not None) - quiet_since_ns <= self._silence_ns:
             return False
         if ref is None and self.option == 'auto':
             self.mode = ABSENT

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from alignment_core.estimation.consistency import NisMonitor
 from alignment_core.estimation.health import ERROR, OK, WARN
-from alignment_core.estimation.outputs import Counters
+from alignment_core.estimation.outputs import Counters, Report
 
 
 @dataclass
@@ -52,10 +52,25 @@ def with_lag(level: int, flags: tuple[str, ...], lag_ns: int, bridge_ns: int, er
     return max(level, ERROR if lag_ns > error_ns else WARN), flags if 'gap' in flags else (*flags, 'gap')
 
 
-def input_trouble(c: Counters) -> bool:
-    """Any sample rejected, any IMU gap, any master sample unmatched, any LDV run not felt."""
-    return bool(c.rejected_nonfinite + c.rejected_out_of_order + c.rejected_quaternion + c.rejected_range
-                + c.rejected_future_stamp + c.rejected_ldv_mode + c.imu_gaps + c.unmatched_master + c.launch_not_felt)
+def input_trouble(c: Counters, rejections: int) -> bool:
+    """Any sample rejected (the rejections the stamps processed reached: input_streams.py), any
+    IMU gap, any master sample unmatched, any LDV run not felt."""
+    return bool(rejections + c.imu_gaps + c.unmatched_master + c.launch_not_felt)
+
+
+def report(level: int, flags: tuple[str, ...], h: Health, monitor: NisMonitor, matching: bool,
+           silent: tuple[str, ...], trouble: bool, relative_velocity: str) -> Report:
+    """The /diagnostics status: the estimates' (level, flags), WARN for a silent master or LDV
+    ('master_silent', 'ldv_silent') and for any input trouble so far, and its message."""
+    if silent:
+        level = max(level, WARN)
+        flags += tuple(f'{k}_silent' for k in silent)
+    if trouble:
+        level = max(level, WARN)
+    text = message(level, h, monitor, matching, silent)
+    if relative_velocity != 'ldv':
+        text += f'; relative velocity {relative_velocity}'
+    return Report(level, flags, text)
 
 
 def failure(h: Health, monitor: NisMonitor) -> str:
