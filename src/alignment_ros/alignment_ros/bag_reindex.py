@@ -190,7 +190,7 @@ def _write(sal: Salvage, work: Path, name: str, mode: str, custom_data: dict[str
         writer.add_topic(topic, type_name, type_hash=meta.get('topic_type_hash') or None,
                          offered_qos=parse_qos(qos) if qos else None)
         topic_of[cid] = topic
-    for t_ns, _, cid, data in sal.messages:
+    for t_ns, _, cid, data in sorted(sal.messages, key=lambda m: (m[0], m[1])):  # log time, arrival
         writer.write(topic_of[cid], unpack(data), t_ns)
     writer.close()
     assert writer.metadata is not None
