@@ -83,6 +83,7 @@ def main() -> int:
     ap.add_argument('--set', dest='sets', action='append', default=[])
     ap.add_argument('--keep', type=Path, default=None, help='run directory (default: a temporary one)')
     ap.add_argument('--json', type=Path, default=None, help='write the samples and slopes here')
+    ap.add_argument('--progress', action='store_true', help='print each sample (JSON) as it is taken')
     a = ap.parse_args()
     out = a.keep or Path(tempfile.mkdtemp(prefix='soak-')) / 'run'
     cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck', '--out', str(out),
@@ -109,6 +110,8 @@ def main() -> int:
         if now >= next_sample and sim_now() is not None:
             samples.append((now - t0, sim_now(), rss_by_node(p.pid)))   # type: ignore[arg-type]
             next_sample = now + a.every_s
+            if a.progress:
+                print(json.dumps(samples[-1]), flush=True)
     log = ''.join(lines)
     summary = json.loads((out / 'summary.json').read_text()) if (out / 'summary.json').exists() else {}
     rec = out / 'stats' / 'recorder.json'
