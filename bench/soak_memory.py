@@ -3,15 +3,17 @@ while it runs and its slope fitted against simulated time (target: < 1 MiB per s
 
     scripts/bench.sh soak_memory [--duration-s 3600] [--rtf 5] [--every-s 5] [--set KEY=VALUE ...]
 
-The slope is fitted over the second half of the run (the first half holds the start-up: imports,
-DDS discovery, the first allocations). Simulated time is read from wall time and the run's own
-real-time factor (summary.json)."""
+Simulated time is read from the run's /clock (a best-effort subscriber of depth 1 on the run's
+domain: it holds nothing back). The slope is fitted over the second half of the simulated run
+(the first half holds the start-up: imports, DDS discovery, the first allocations, the bag's
+reorder buffer filling up to the streams' lag)."""
 from __future__ import annotations
 
 import argparse
 import json
 import subprocess
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -21,12 +23,29 @@ ROOT = Path(__file__).resolve().parents[1]
 NODES = ('ship_motion_node', 'master_ins_node', 'slave_ins_node', 'ldv_node', 'alignment_filter_node', 'recorder')
 
 
-def rss_by_node() -> dict[str, float]:
-    """MiB resident per node process of this machine (by its command line)."""
-    out: dict[str, float] = {}
+def descendants(root: int) -> set[int]:
+    """The processes below `root` (from /proc: parent ids)."""
+    parent: dict[int, int] = {}
     for proc in Path('/proc').iterdir():
-        if not proc.name.isdigit():
-            continue
+        if proc.name.isdigit():
+            try:
+                parent[int(proc.name)] = int((proc / 'stat').read_text().rsplit(')', 1)[1].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue
+    out: set[int] = set()
+    frontier = {root}
+    while frontier:
+        frontier = {pid for pid, pp in parent.items() if pp in frontier} - out
+        out |= frontier
+    return out
+
+
+def rss_by_node(root: int) -> dict[str, float]:
+    """MiB resident per node process of the run below `root` (by its command line; not the
+    processes of other runs on the machine)."""
+    out: dict[str, float] = {}
+    for pid in descendants(root):
+        proc = Path('/proc') / str(pid)
         try:
             cmd = (proc / 'cmdline').read_bytes().replace(b'\0', b' ').decode(errors='replace')
             status = (proc / 'status').read_text()
@@ -41,40 +60,82 @@ def rss_by_node() -> dict[str, float]:
     return out
 
 
+def clock_reader(domain: int):
+    """(spin, latest): a node on the run's domain whose spin(timeout) takes /clock messages and
+    latest() returns the simulated seconds of the newest (None before the first)."""
+    import rclpy
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+    from rosgraph_msgs.msg import Clock
+    rclpy.init(domain_id=domain)
+    node = rclpy.create_node('soak_memory_clock')
+    now: list[float] = []
+    node.create_subscription(Clock, '/clock', lambda m: now.append(m.clock.sec + 1e-9 * m.clock.nanosec),
+                             QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                                        reliability=ReliabilityPolicy.BEST_EFFORT))
+    return (lambda timeout: rclpy.spin_once(node, timeout_sec=timeout)), (lambda: now[-1] if now else None)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     ap.add_argument('--duration-s', type=float, default=3600.0)
     ap.add_argument('--rtf', type=float, default=5.0)
     ap.add_argument('--every-s', type=float, default=5.0)
     ap.add_argument('--set', dest='sets', action='append', default=[])
+    ap.add_argument('--keep', type=Path, default=None, help='run directory (default: a temporary one)')
+    ap.add_argument('--json', type=Path, default=None, help='write the samples and slopes here')
+    ap.add_argument('--progress', action='store_true', help='print each sample (JSON) as it is taken')
     a = ap.parse_args()
-    out = Path(tempfile.mkdtemp(prefix='soak-')) / 'run'
+    out = a.keep or Path(tempfile.mkdtemp(prefix='soak-')) / 'run'
     cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck', '--out', str(out),
            '--real-time-factor', str(a.rtf), '--set', f'duration_s={a.duration_s}']
     for s in a.sets:
         cmd += ['--set', s]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert p.stdout is not None
+    first = p.stdout.readline()
+    while first.startswith('setup.sh:'):
+        first = p.stdout.readline()
+    if not first.startswith('ROS_DOMAIN_ID='):
+        print(first + p.stdout.read())
+        return 1
+    lines: list[str] = [first]
+    threading.Thread(target=lambda: lines.extend(p.stdout), daemon=True).start()   # type: ignore[arg-type]
+    spin, sim_now = clock_reader(int(first.split()[0].split('=')[1]))
+    samples: list[tuple[float, float, dict[str, float]]] = []   # (wall s, simulated s, RSS MiB)
     t0 = time.monotonic()
-    samples: list[tuple[float, dict[str, float]]] = []
+    next_sample = t0
     while p.poll() is None:
-        samples.append((time.monotonic() - t0, rss_by_node()))
-        time.sleep(a.every_s)
-    log = p.stdout.read() if p.stdout else ''
+        spin(0.05)
+        now = time.monotonic()
+        if now >= next_sample and sim_now() is not None:
+            samples.append((now - t0, sim_now(), rss_by_node(p.pid)))   # type: ignore[arg-type]
+            next_sample = now + a.every_s
+            if a.progress:
+                print(json.dumps(samples[-1]), flush=True)
+    log = ''.join(lines)
     summary = json.loads((out / 'summary.json').read_text()) if (out / 'summary.json').exists() else {}
-    rtf = summary.get('real_time_factor') or a.rtf
+    rec = out / 'stats' / 'recorder.json'
+    reorder = json.loads(rec.read_text()).get('reorder') if rec.exists() else None
     print(f'run exit {p.returncode}, lost {summary.get("lost_total")}, complete {summary.get("complete")}, '
-          f'real-time factor {rtf:.2f}, {len(samples)} samples; output {out}')
+          f'real-time factor {summary.get("real_time_factor") or 0:.2f}, {len(samples)} samples '
+          f'over {samples[-1][1] if samples else 0:.0f} simulated s; bag reorder buffer {reorder}; '
+          f'output {out}')
     if p.returncode != 0:
         print(log[-2000:])
     print(f"{'node':<24}{'RSS start MiB':>14}{'RSS end MiB':>12}{'slope MiB/h (sim)':>19}")
+    slopes = {}
     for n in NODES:
-        pts = [(t * rtf, s[n]) for t, s in samples if n in s]
+        pts = [(sim, s[n]) for _, sim, s in samples if n in s]
         if len(pts) < 4:
             continue
         t, r = np.array(pts).T
-        half = t >= t[-1] / 2
-        slope = np.polyfit(t[half], r[half], 1)[0] * 3600.0
-        print(f'{n:<24}{r[0]:>14.1f}{r[-1]:>12.1f}{slope:>19.2f}')
+        half = t >= t[0] + (t[-1] - t[0]) / 2
+        slopes[n] = float(np.polyfit(t[half], r[half], 1)[0] * 3600.0)
+        print(f'{n:<24}{r[0]:>14.1f}{r[-1]:>12.1f}{slopes[n]:>19.2f}')
+    if a.json:
+        a.json.write_text(json.dumps({'slopes_mib_per_h': slopes, 'summary_complete': summary.get('complete'),
+                                      'lost_total': summary.get('lost_total'), 'reorder': reorder,
+                                      'samples': samples}, indent=1))
     return 0 if p.returncode == 0 else 1
 
 

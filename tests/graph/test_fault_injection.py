@@ -4,9 +4,11 @@ a short clean catapult bag, written with the `rosbags` library, replayed into th
 The clean bag holds what the graph's sensor nodes publish for a 12 s catapult run (seed 7, launch
 at 8 s): /clock, /master/odom, /aircraft/imu and /ldv/twist, each message logged at its stamp.
 Each corrupted copy changes messages from 4 s on (parked on the deck), keeping their log times:
-a master quaternion of norm 2 or zero for 10 samples, one IMU or master value of 1e30, 1 s of IMU
-samples missing, one IMU sample stamped 100 s ahead, an LDV reading of 10 m/s for 5 samples (a
-"launch" the accelerometers do not feel), a wrong frame_id on every input. Most copies are driven
+a master quaternion of norm 2 or zero for 10 samples, one IMU or master value of 1e30, one IMU
+value NaN, one master value Inf, two IMU samples swapped, a master sample twice, one IMU sample
+stamped 0, 1 s of IMU samples missing, one IMU sample stamped 100 s ahead, an LDV reading of
+10 m/s for 5 samples (a "launch" the accelerometers do not feel), a wrong frame_id on every
+input. Most copies are driven
 in-process through the filter node's own input path (FilterInputs: frame check, message
 conversion, the engine), which is what the node runs in its callbacks; one is replayed through
 ROS (scripts/replay.sh, the filter node in its own process). Every case must end within 0.3' of
@@ -41,8 +43,9 @@ STORE = get_typestore(Stores.ROS2_JAZZY)
 TYPES = {topics.CLOCK: 'rosgraph_msgs/msg/Clock', topics.MASTER_ODOM: 'nav_msgs/msg/Odometry',
          topics.AIRCRAFT_IMU: 'sensor_msgs/msg/Imu', topics.LDV_TWIST: 'geometry_msgs/msg/TwistWithCovarianceStamped',
          topics.TRUTH_MISALIGNMENT: 'geometry_msgs/msg/Vector3Stamped'}
-CASES = ('quaternion_norm_2', 'quaternion_zero', 'imu_1e30', 'master_1e30', 'imu_gap_1s', 'imu_100s_ahead',
-         'ldv_10mps_on_deck', 'wrong_frame_id')
+CASES = ('quaternion_norm_2', 'quaternion_zero', 'imu_1e30', 'master_1e30', 'imu_nan', 'master_inf',
+         'imu_swapped', 'master_twice', 'imu_stamp_0', 'imu_gap_1s', 'imu_100s_ahead', 'ldv_10mps_on_deck',
+         'wrong_frame_id')
 
 
 def _write_clean(path: Path) -> None:
@@ -78,6 +81,12 @@ def _corrupt(case: str, m, topic: str, k: int) -> bool:
         m.twist.twist.linear.x = 1e30
     if topic == topics.AIRCRAFT_IMU and k == K and case == 'imu_1e30':
         m.linear_acceleration.x = 1e30
+    if topic == topics.AIRCRAFT_IMU and k == K and case == 'imu_nan':
+        m.angular_velocity.y = float('nan')
+    if topic == topics.MASTER_ODOM and k == K and case == 'master_inf':
+        m.twist.twist.angular.z = float('inf')
+    if topic == topics.AIRCRAFT_IMU and k == K and case == 'imu_stamp_0':
+        m.header.stamp.sec, m.header.stamp.nanosec = 0, 0
     if topic == topics.AIRCRAFT_IMU and case == 'imu_gap_1s' and K <= k < K + 100:
         return False
     if topic == topics.AIRCRAFT_IMU and k == K and case == 'imu_100s_ahead':
@@ -91,14 +100,25 @@ def _write_corrupted(clean: Path, path: Path, case: str) -> None:
     """A copy of the clean bag with the case's corruption (read, changed and written with rosbags;
     every message keeps its log time)."""
     count = dict.fromkeys(TYPES, 0)
+    held = None
     with Reader(clean) as r, Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as w:
         conn = {c.topic: w.add_connection(c.topic, c.msgtype, typestore=STORE) for c in r.connections}
         for c, t, raw in r.messages():
             m = STORE.deserialize_cdr(raw, c.msgtype)
-            keep = _corrupt(case, m, c.topic, count[c.topic])
+            k = count[c.topic]
             count[c.topic] += 1
-            if keep:
-                w.write(conn[c.topic], t, STORE.serialize_cdr(m, c.msgtype))
+            if not _corrupt(case, m, c.topic, k):
+                continue
+            data = STORE.serialize_cdr(m, c.msgtype)
+            if case == 'imu_swapped' and c.topic == topics.AIRCRAFT_IMU and k in (K, K + 1):
+                if k == K:
+                    held = data                  # the K-th sample goes out after the (K+1)-th
+                    continue
+                w.write(conn[c.topic], t, data)
+                data = held
+            w.write(conn[c.topic], t, data)
+            if case == 'master_twice' and c.topic == topics.MASTER_ODOM and k == K:
+                w.write(conn[c.topic], t, data)
 
 
 @pytest.fixture(scope='module')
@@ -157,6 +177,9 @@ def clean(bags):
 # case -> (counter that must count the fault, its count)
 COUNTED = {'quaternion_norm_2': ('rejected_quaternion', 10), 'quaternion_zero': ('rejected_quaternion', 10),
            'imu_1e30': ('rejected_range', 1), 'master_1e30': ('rejected_range', 1),
+           'imu_nan': ('rejected_nonfinite', 1), 'master_inf': ('rejected_nonfinite', 1),
+           'imu_swapped': ('rejected_out_of_order', 1), 'master_twice': ('rejected_out_of_order', 1),
+           'imu_stamp_0': ('rejected_out_of_order', 1),
            'imu_gap_1s': ('bridged_gaps', 1), 'imu_100s_ahead': ('rejected_future_stamp', 1),
            'ldv_10mps_on_deck': ('launch_not_felt', 1)}
 

@@ -141,7 +141,7 @@ def test_estimate_messages_round_trip():
 # ----- the filter node's inputs ----------------------------------------------------------
 
 def test_frames_assemble_per_stamp_and_bad_ones_are_counted():
-    fa = FrameAssembler(3)
+    fa = FrameAssembler(3, max_wait_ns=1000)
     assert fa.add(0, 10, 1.0) is None and fa.add(1, 10, 2.0) is None
     assert fa.add(1, 10, 9.0) is None                       # port 1 twice at one stamp
     assert fa.add(0, 20, 4.0) is None                       # stamp 20 begun; 10 still open
@@ -153,6 +153,26 @@ def test_frames_assemble_per_stamp_and_bad_ones_are_counted():
     assert fa.add(0, 30, 1.0)[0] == 30                      # 20 never completed
     assert fa.add(7, 40, 1.0) is None
     assert dict(fa.rejected) == {'duplicate': 1, 'out_of_order': 1, 'incomplete': 1, 'unknown_port': 1}
+
+
+def test_a_trailing_port_is_waited_for_and_a_silent_one_is_not():
+    """Port 2 trails the others by 100 stamps (a reliable stream behind the rest): every frame
+    still completes, in stamp order. Then port 2 falls silent: its open stamps are dropped as
+    incomplete once the newest port stamp is more than max_wait_ns past them."""
+    fa = FrameAssembler(3, max_wait_ns=1500)                # 150 stamps
+    frames = []
+    for k in range(200):
+        for port in (0, 1):
+            assert fa.add(port, 10 * k, float(k)) is None
+        if k >= 100:
+            frames.append(fa.add(2, 10 * (k - 100), float(k - 100)))
+    for k in range(100, 200):
+        frames.append(fa.add(2, 10 * k, float(k)))
+    assert [f[0] for f in frames] == [10 * k for k in range(200)] and not fa.rejected
+    for k in range(200, 370):                               # port 2 silent from 2000 on
+        for port in (0, 1):
+            fa.add(port, 10 * k, 1.0)
+    assert fa.rejected == {'incomplete': 19} and min(fa.pending) == 2190    # 3690 - t > 1500
 
 
 def test_imu_blocks_average_over_block_samples():

@@ -53,3 +53,21 @@ def test_simulation_time_advances_at_the_real_time_factor(ros):
     assert abs(slope / RTF - 1.0) < TOL, f'simulation advanced at {slope:.3f}x wall time, not {RTF}x'
     span = (sim[-1] - sim[0]) / (wall[-1] - wall[0])
     assert abs(span / RTF - 1.0) < TOL, f'from 1 s to the last sample: {span:.3f}x wall time, not {RTF}x'
+
+
+def test_the_clock_source_does_not_listen_to_its_own_clock(ros):
+    """Started with use_sim_time (as start_node.sh starts every node), ship_motion_node keeps
+    wall time: no subscription of its own on /clock, whose events would pile up between its
+    spins (the node's memory grew by ~46 MiB per simulated hour that way)."""
+    node, start = ros
+    start('ship_motion_node', '-p', f'wait_subscribers:=["{GO}:1"]', '-p', 'wait_timeout_s:=60.0')
+
+    def publishers_seen() -> bool:
+        return any(i.node_name == 'ship_motion_node'
+                   for i in node.get_publishers_info_by_topic(topics.SHIP_ODOM))
+
+    spin_until(node, publishers_seen)
+    t_end = time.monotonic() + 1.0     # the node's subscriptions are announced with its publishers
+    spin_until(node, lambda: time.monotonic() > t_end)
+    readers = [i.node_name for i in node.get_subscriptions_info_by_topic(topics.CLOCK)]
+    assert 'ship_motion_node' not in readers

@@ -9,19 +9,22 @@ from typing import Any
 
 import numpy as np
 
-MAX_PENDING_STAMPS = 16
-"""Stamps with some ports but not all kept waiting at most; older ones are dropped as incomplete."""
-
 
 class FrameAssembler:
     """Port pressures in (each port's messages in stamp order), whole frames out: a frame is
     complete when all n ports of one stamp have arrived. Dropped and counted in `rejected`:
     a port message not newer than that port's last one or than the last frame ('duplicate' at
     the same stamp, 'out_of_order' before it), an unknown port ('unknown_port'), and a stamp
-    left incomplete when a later frame completes ('incomplete')."""
+    left incomplete ('incomplete') when a later frame completes (every port has gone past it)
+    or when it is more than max_wait_ns older than the newest port stamp (a port fell silent).
+    A port that trails the others (as fast as possible, a reliable stream can be thousands of
+    messages behind another) is waited for: a bound on the count of open stamps (16, once)
+    dropped frames whose last port was merely late."""
 
-    def __init__(self, n_ports: int) -> None:
+    def __init__(self, n_ports: int, max_wait_ns: int) -> None:
         self.n = int(n_ports)
+        self.max_wait_ns = int(max_wait_ns)
+        self.newest_ns: int | None = None
         self.pending: dict[int, tuple[np.ndarray, np.ndarray]] = {}   # t_ns -> (pressures (n,), have (n,))
         self.last_port_ns: list[int | None] = [None] * self.n
         self.last_frame_ns: int | None = None
@@ -41,11 +44,13 @@ class FrameAssembler:
         if self._refuse(t_ns, self.last_frame_ns) or self._refuse(t_ns, self.last_port_ns[port]):
             return None
         self.last_port_ns[port] = t_ns
+        if self.newest_ns is None or t_ns > self.newest_ns:
+            self.newest_ns = t_ns
+            for t in [t for t in self.pending if t_ns - t > self.max_wait_ns]:
+                del self.pending[t]
+                self.rejected['incomplete'] += 1
         if t_ns not in self.pending:
             self.pending[t_ns] = (np.full(self.n, np.nan), np.zeros(self.n, dtype=bool))
-            while len(self.pending) > MAX_PENDING_STAMPS:
-                del self.pending[min(self.pending)]
-                self.rejected['incomplete'] += 1
         p, have = self.pending[t_ns]
         p[port], have[port] = pressure_pa, True
         if not have.all():

@@ -53,7 +53,7 @@ class AirDataFilterNode(node_util.CountingNode):
         self.plane = pipeline.plane_of(sc)
         self.est = make_estimator(self.cfg, sc)
         self.paper = isinstance(self.est, PaperAirDataFilter)
-        self.frames = FrameAssembler(n)
+        self.frames = FrameAssembler(n, int(MAX_WAIT_S * 1e9))
         self.imu = ImuBlocks(round(IMU_BLOCK_S * sc.rate_hz), sc.dt_ns)
         self.order = StampOrder((INS, IMU, FRAME) if self.paper else (INS, FRAME), int(MAX_WAIT_S * 1e9))
         self.ins_topic = INS_TOPICS[self.cfg.ins_source]

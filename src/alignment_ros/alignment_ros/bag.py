@@ -25,7 +25,8 @@ the recorder stores **simulation time** instead:
 Both stamp kinds sit at the same place in the CDR bytes (right after the 4-byte encapsulation
 header: ``int32 sec``, ``uint32 nanosec``), so :func:`stamp_reader` reads them with one
 ``struct.unpack_from`` and no deserialisation. Because log time is a stamp, messages arrive out
-of log-time order; the writer sorts them when it closes the bag (see :mod:`bag_writer`).
+of log-time order; the writer puts them in order through a bounded reorder buffer (see
+:mod:`bag_writer`).
 """
 from __future__ import annotations
 

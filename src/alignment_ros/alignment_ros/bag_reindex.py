@@ -4,8 +4,9 @@ run_graph and replay apply to a bag whose recorder died or whose file is damaged
 What was written is kept, what is derived is rebuilt:
 
 * a recording spool left behind (``NAME.recording.mcap``: the recorder was killed before it
-  closed the bag) is finalised as :class:`~alignment_ros.bag_writer.BagWriter` closes a bag
-  (sorted ``NAME_0.mcap`` with chunk index and summary); partial bag files of a cut close go;
+  closed the bag) is sorted by log time and written as :class:`~alignment_ros.bag_writer.BagWriter`
+  writes a bag (``NAME_0.mcap`` with chunk index and summary); the bag files the recorder was
+  writing go (the spool holds all they held, and more);
 * a bag file without a valid MCAP summary (cut short, e.g. mid-chunk) is rewritten with every
   complete message it still holds (:class:`~alignment_ros.mcap_salvage.Salvage`), with its
   channels' QoS profiles and type hashes;
@@ -190,7 +191,7 @@ def _write(sal: Salvage, work: Path, name: str, mode: str, custom_data: dict[str
         writer.add_topic(topic, type_name, type_hash=meta.get('topic_type_hash') or None,
                          offered_qos=parse_qos(qos) if qos else None)
         topic_of[cid] = topic
-    for t_ns, _, cid, data in sal.messages:
+    for t_ns, _, cid, data in sorted(sal.messages, key=lambda m: (m[0], m[1])):  # log time, arrival
         writer.write(topic_of[cid], unpack(data), t_ns)
     writer.close()
     assert writer.metadata is not None

@@ -30,7 +30,7 @@ from .signals import Interrupted, SignalGuard, die_with_parent
 NODE_STOP_TIMEOUT_S = 60.0    # > node_util.ACK_TIMEOUT_S: nodes wait for acknowledgements
 CUT_NODE_STOP_TIMEOUT_S = 10.0   # a cut run: the subscribers may be gone, their acks with them
 RECORDER_EXPECT_TIMEOUT_S = 120.0
-RECORDER_CLOSE_TIMEOUT_S = 60.0  # closing sorts the spool and writes the bag files
+RECORDER_CLOSE_TIMEOUT_S = 60.0  # closing writes the reorder buffer's rest and the summary
 
 
 def root() -> Path:

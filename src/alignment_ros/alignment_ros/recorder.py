@@ -34,7 +34,9 @@ can tell a message from a publisher that is not one of its run's.
 
 While a topic is short of its expected count the recorder also takes from its subscription
 directly, so a message that reached the reader is never left behind. It then closes the bag
-(sorted files, metadata.yaml) and writes ``--stats``. It prints ``recorder ready`` (one flushed
+(the rest of the reorder buffer, the file's summary, metadata.yaml) and writes ``--stats``
+(``reorder``: the reorder buffer's peak and the messages it released late, see
+:mod:`alignment_ros.bag_reorder`). It prints ``recorder ready`` (one flushed
 stdout line) once the first subscriptions exist.
 """
 from __future__ import annotations
@@ -403,6 +405,8 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         'executor': args.executor,
         'receive_span_s': span,
         'receive_rate_msg_s': total / span if span > 0 else None,
+        'reorder': {'peak_bytes': writer.reorder.peak_bytes,
+                    'peak_messages': writer.reorder.peak_messages, 'late': writer.reorder.late},
     }
 
 
