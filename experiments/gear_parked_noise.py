@@ -38,11 +38,11 @@ SPLIT_HZ = 0.5
 def relative_motion(sea_state: int, wave_heading_deg: float, gust: str, seed: int, duration_s: float,
                     speed_kn: float) -> tuple[np.ndarray, np.ndarray, float]:
     """IMU-point velocity relative to the deck (K, 3; ship axes, m/s), gear rotation (K, 3; rad)
-    and the sample rate, for one run of the `deck` scenario on a spectral carrier sea."""
-    sc = scenario.load('deck', {'seed': seed, 'duration_s': duration_s, 'ship.mode': 'spectral',
-                                'ship.sea_state': sea_state, 'ship.wave_heading_deg': wave_heading_deg,
-                                'ship.speed_kn': speed_kn, 'aircraft.gear.enabled': True,
-                                'aircraft.gear.gust_severity': gust})
+    and the sample rate, for one run of the `deck_paper` scenario on a spectral carrier sea."""
+    sc = scenario.load('deck_paper', {'seed': seed, 'duration_s': duration_s, 'ship.mode': 'spectral',
+                                      'ship.sea_state': sea_state, 'ship.wave_heading_deg': wave_heading_deg,
+                                      'ship.speed_kn': speed_kn, 'aircraft.gear.enabled': True,
+                                      'aircraft.gear.gust_severity': gust})
     ships = ShipBatch.of(pipeline.ship_samples(sc))
     kin = pipeline.SlaveImuStage(sc).kin
     kin.truth_batch(ships, (ships.t_ns - sc.t0_ns) / 1e9)        # simulates the gear on the way
@@ -73,7 +73,7 @@ def main() -> None:
     a = ap.parse_args()
     cases = [(ss, hd, 'moderate') for ss in (4, 5) for hd in (180.0, 135.0, 90.0)]
     cases += [(5, 90.0, 'none'), (5, 135.0, 'none'), (0, 180.0, 'moderate')]
-    print(f"deck scenario, spot (40, -10, 15) m, spectral carrier at {a.speed_kn:g} kn, cos2 spreading; "
+    print(f"deck_paper scenario, spot (40, -10, 15) m, spectral carrier at {a.speed_kn:g} kn, cos2 spreading; "
           f"gear defaults; {a.seeds} seeds x {a.duration:g} s (first {SKIP_S:g} s dropped)\n")
     print("| sea state | waves from | gusts | RMS x / y / z (mm/s) | RMS norm (mm/s) | below / above 0.5 Hz "
           "(mm/s) | peak (Hz) | white-equivalent (mm/s) | gear roll / pitch / yaw RMS (') |")
