@@ -53,3 +53,15 @@ def test_truth_free_replay_of_an_imported_log(tmp_path):
     assert np.max(np.abs(est['misalignment'] - want)) < 1e-6
     assert s['misalignment_estimate_rad'] == est['misalignment'][-1].tolist()
     assert np.allclose(s['misalignment_sigma_rad'], batch.outputs[-1].misalignment_sigma, rtol=1e-6)
+    # issue 18: the replay of an imported log leaves its pictures and report (no truth to draw),
+    # and plot_bag.sh draws the imported bag itself (sensor streams only: the LDV's deck velocity)
+    pngs = {f.name for f in (tmp_path / 'replay' / 'plots').glob('*.png') if f.stat().st_size > 0}
+    assert {'misalignment.png', 'states.png', 'consistency.png'} <= pngs
+    report = (tmp_path / 'replay' / 'report.md').read_text()
+    assert 'plots/misalignment.png' in report
+    q = subprocess.run([str(ROOT / 'scripts/plot_bag.sh'), str(tmp_path / 'bag'), '--out', str(tmp_path / 'p')],
+                       capture_output=True, text=True, timeout=300)
+    assert q.returncode == 0, q.stdout + q.stderr
+    drawn = {f.name for f in (tmp_path / 'p').glob('**/*.png') if f.stat().st_size > 0}
+    assert 'motion.png' in drawn and 'misalignment.png' not in drawn
+    assert (tmp_path / 'p' / 'report.md').exists()
