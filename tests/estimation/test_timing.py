@@ -219,3 +219,14 @@ def test_doppler_known_latency_recovers_the_zero_latency_result():
     assert c.doppler_updates == c0.doppler_updates > 400 and c.unmatched_doppler == 0
     np.testing.assert_allclose(err, err0, rtol=0, atol=0.1 * sig0.min())
     np.testing.assert_allclose(sig, sig0, rtol=1e-2)
+
+
+def test_outputs_carry_their_validity_time():
+    """Each output's misalignment refers to the stamp less the master latency the filter is told
+    (the matches' validity time); without a latency told, the stamp itself."""
+    for told_ns in (0, 20 * MS):
+        sc = scenario.load('catapult', {**SHORT, 'duration_s': 3.0, 'master.latency_s': 0.02,
+                                        'filter.master_latency_s': told_ns * 1e-9})
+        est = pipeline.run(sc, keep_truth=False).estimates
+        assert len(est) > 10
+        assert all(e.t_valid_ns == e.t_ns - told_ns and e.validity_ns == e.t_ns - told_ns for e in est)

@@ -75,6 +75,20 @@ def true_misalignment(inp: pipeline.Inputs) -> np.ndarray:
     return rel
 
 
+def truth_indices(truth_t_ns: np.ndarray, t_ns: np.ndarray) -> np.ndarray:
+    """(K,) index of the first truth sample at or after each time t_ns (the last one beyond)."""
+    return np.minimum(np.searchsorted(truth_t_ns, t_ns), len(truth_t_ns) - 1)
+
+
+def misalignment_errors(est: list, truth_t_ns: np.ndarray, rel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(K, 3) misalignment error (rad) of each estimate against the truth `rel` (K_truth, 3), taken
+    at the estimate's time of validity (its stamp less the master latency the filter is told:
+    the relative attitude it estimated, docs/carrier.md), and its (K, 3) 1-sigma."""
+    k_truth = truth_indices(truth_t_ns, np.array([e.validity_ns for e in est], dtype=np.int64))
+    err = np.array([e.misalignment for e in est]).reshape(-1, 3) - rel[k_truth]
+    return err, np.array([e.misalignment_sigma for e in est]).reshape(-1, 3)
+
+
 def attitude_errors(est: list, q_true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(K, 3) slave attitude error phi (nav frame, C_est = (I - [phi x]) C_true) and its 1-sigma
     from the filter's attitude covariance, at each estimate."""
@@ -97,12 +111,11 @@ def run_one(spec: RunSpec) -> RunOutcome:
     est = pipeline.align(sc, inp).outputs
     t0 = sc.t0_ns
     t_ns = np.array([e.t_ns for e in est], dtype=np.int64)
-    k_truth = np.minimum(np.searchsorted(inp.ships.t_ns, t_ns), len(inp.ships.t_ns) - 1)
     if spec.quantity == 'attitude':
+        k_truth = truth_indices(inp.ships.t_ns, t_ns)
         err, sig = attitude_errors(est, inp.truth['q_nb'][k_truth])
     elif spec.quantity == 'misalignment':
-        err = np.array([e.misalignment for e in est]).reshape(-1, 3) - true_misalignment(inp)[k_truth]
-        sig = np.array([e.misalignment_sigma for e in est]).reshape(-1, 3)
+        err, sig = misalignment_errors(est, inp.ships.t_ns, true_misalignment(inp))
     else:
         raise ValueError(f"quantity must be 'misalignment' or 'attitude', got {spec.quantity!r}")
     on_deck = inp.ships.t_ns[inp.truth['on_deck']]

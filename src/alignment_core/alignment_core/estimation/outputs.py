@@ -46,6 +46,14 @@ class Estimate:
     # SI, its 1-sigma is `sigma`; None: not computed
     state: np.ndarray | None = None   # (n,)
     report: Report | None = None      # what /diagnostics says at this output (set by the engine)
+    # the time the misalignment refers to: the stamp less the master latency the filter is told
+    # (docs/engine.md, time of validity); None: t_ns (an estimate made before this field)
+    t_valid_ns: int | None = None
+
+    @property
+    def validity_ns(self) -> int:
+        """The time of validity of the misalignment (t_ns when not given)."""
+        return self.t_ns if self.t_valid_ns is None else self.t_valid_ns
 
 
 @dataclass

@@ -106,8 +106,9 @@ class EstimateMaker:
         return True
 
     def make(self, t: int, live: LiveSolution, res: MatchResults, updates: int, matching: bool,
-             level: int, flags: tuple[str, ...]) -> Estimate:
-        """The output at master stamp t with what `keep` kept last (the prior before any)."""
+             level: int, flags: tuple[str, ...], t_valid: int | None = None) -> Estimate:
+        """The output at master stamp t, valid at t_valid (default t), with what `keep` kept
+        last (the prior before any)."""
         st = live.ins.s
         if self.held is None:
             att, p0 = self._model.attitude, self._model.initial_covariance()
@@ -123,7 +124,8 @@ class EstimateMaker:
             nis=res.nis, updates=updates, matching=matching, fading=diag.get('fading', 1.0),
             healthy=level < ERROR, level=level, flags=flags, p_w=p_w, v_b=v_b, w_b=w_b,
             pose_cov=pose_cov, twist_cov=twist_cov,
-            state=None if self.held_state is None else self.held_state.copy())
+            state=None if self.held_state is None else self.held_state.copy(),
+            t_valid_ns=t if t_valid is None else t_valid)
 
 
 class PublishGuard:
@@ -163,7 +165,8 @@ class PublishGuard:
         self.holding = True
         held = self.last_good if self.last_good is not None else prior(e)
         why = e.flags if good else (*e.flags, 'absurd')
-        return dataclasses.replace(held, t_ns=e.t_ns, level=ERROR, healthy=False, matching=False,
+        return dataclasses.replace(held, t_ns=e.t_ns, t_valid_ns=e.t_valid_ns, level=ERROR, healthy=False,
+                                   matching=False,
                                    updates=e.updates, flags=tuple(dict.fromkeys((*why, 'held'))), report=e.report)
 
 
