@@ -43,6 +43,7 @@ from .launch import (
     published_counts,
     root,
     start_recorder,
+    unpaired_drops,
     watch_end_time,
 )
 from .params import given_parameters
@@ -240,6 +241,8 @@ def _summary(run: Run, sc: core_scenario.Scenario, wall: float) -> dict | None:
     no bag to read."""
     bag = run.out / 'bag'
     ours = {n for n in run.procs if n != 'recorder'}
+    for node, n in unpaired_drops(run.out).items():
+        run.problems.append(f'{node} dropped {n} unpaired half-samples (its input fell too far behind)')
     try:
         s = summary.summarise(bag, bag, sc.start_time_s, sc.duration_s, wall,
                               published_counts(run.out, with_held=True),

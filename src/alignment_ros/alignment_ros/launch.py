@@ -267,6 +267,17 @@ def published_counts(out: Path, with_held: bool = False) -> dict[str, int]:
     return pub
 
 
+def unpaired_drops(out: Path) -> dict[str, int]:
+    """Per node, the halves of a sample it dropped unpaired (stamped_pairs.StampPairer's bound
+    reached: its reader fell that far behind); from the nodes' stats files."""
+    drops = {}
+    for f in sorted((out / 'stats').glob('*_node.json')):
+        n = json.loads(f.read_text()).get('rejected', {}).get('unpaired_dropped', 0)
+        if n:
+            drops[f.stem] = int(n)
+    return drops
+
+
 def finish_recording(run: Run, expect_counts: Path, end_reached: bool = True) -> None:
     """End of a run, in order: stop the nodes (each exits once its subscribers acknowledged
     every message), give the recorder their published counts, wait until it has recorded them.

@@ -35,6 +35,11 @@ class StampPairer:
         self._trim()
         return None
 
+    def counts(self) -> dict[str, int]:
+        """What never became a pair, by reason (a node's stats 'rejected'; the launcher reports
+        any 'unpaired_dropped' as a problem: a simulated sample was lost)."""
+        return {'out_of_order': self.rejected, 'unpaired_dropped': self.dropped}
+
     def _trim(self) -> None:
         for d in (self.a, self.b):
             while len(d) > self.max_pending:

@@ -38,6 +38,7 @@ class LdvNode(node_util.CountingNode):
 
     def _step(self, pair) -> None:
         if pair is None:
+            self.rejected.update(self.pairs.counts())
             return
         ship_odom, air_odom = pair
         aircraft = convert.msg_to_truth(air_odom)

@@ -51,7 +51,7 @@ class SlaveInsNode(node_util.CountingNode):
 
     def _step(self, pair) -> None:
         if pair is None:
-            self.rejected['out_of_order'] = self.pairs.rejected
+            self.rejected.update(self.pairs.counts())
             return
         s = convert.msgs_to_ship(*pair)
         truth, imu = self.stage.step(s)
