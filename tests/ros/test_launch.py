@@ -63,3 +63,17 @@ def test_non_negative_finite_numbers(text, ok):
     else:
         with pytest.raises(argparse.ArgumentTypeError):
             parse(text)
+
+
+@pytest.mark.parametrize('scenario', ['catapult', 'seed004'])
+def test_the_end_of_a_run_is_judged_on_stamped_topics_only(scenario):
+    """An unstamped topic is logged at the recorder's latest /clock, which under load lags the
+    other streams: its last message can be logged before the end time, and the run would wait
+    for an end that never comes (seen in CI with /air_data/state)."""
+    from alignment_core.config import scenario as core_scenario
+    from alignment_ros import msg_definitions
+    from alignment_ros.graph import end_topics_of
+    from alignment_ros.topics import TOPIC_TYPES
+    sc = core_scenario.resolve(core_scenario.given_data(scenario, {}, None))
+    unstamped = [t for t in end_topics_of(sc) if not msg_definitions.has_stamp(TOPIC_TYPES[t])]
+    assert unstamped == []
