@@ -121,3 +121,27 @@ def test_what_comes_after_the_end_is_not_scored(bag):
     assert s['complete'] is True and s['sim_time_s'] == 0.55
     assert s['scored_at_s'] == pytest.approx(1.5) and s['estimate_stamp_s'] == pytest.approx(1.5)
     assert s['topics']['/alignment/misalignment'] == 21     # recorded all the same
+
+
+def test_a_moving_truth_is_scored_at_the_estimates_time_of_validity(tmp_path):
+    """On its gear or a flexing deck the relative attitude moves: the estimate stamped t with a
+    master latency L told to the filter is the relative attitude at t - L. Truth here: a ramp of
+    1 mrad per 0.1 s; every estimate equals the truth 0.2 s before its stamp, so with L = 0.2 s
+    the error is zero and without it -2 mrad on each axis."""
+    path = tmp_path / 'bag'
+    ramp = [(1e-2 * k, -1e-2 * k, 2e-2 * k) for k in range(21)]
+    with BagWriter(path) as w:
+        w.add_topic('/truth/misalignment', 'geometry_msgs/msg/Vector3Stamped')
+        w.add_topic('/alignment/misalignment', 'geometry_msgs/msg/Vector3Stamped')
+        w.add_topic('/alignment/state', 'std_msgs/msg/Float64MultiArray')
+        for k in range(11):
+            t = NS + k * NS // 10
+            w.write('/truth/misalignment', vec(t, [x / 10 for x in ramp[k]]), t)
+        for k in range(11):
+            t = NS + k * NS // 10
+            w.write('/alignment/misalignment', vec(t, [x / 10 for x in ramp[max(k - 2, 0)]]), t)
+            w.write('/alignment/state', state(), t)
+    told = summary.summarise(path, path, 1.0, 1.0, 1.0, latency_s=0.2)
+    assert told['misalignment_error_rad'] == pytest.approx([0.0, 0.0, 0.0], abs=1e-12)
+    untold = summary.summarise(path, path, 1.0, 1.0, 1.0)
+    assert untold['misalignment_error_rad'] == pytest.approx([-2e-3, 2e-3, -4e-3], abs=1e-12)

@@ -12,6 +12,7 @@ from alignment_core.config.scenario import Scenario, tau_of
 from alignment_core.estimation.engine import TransferAlignment
 from alignment_core.estimation.outputs import Estimate
 from alignment_core.geometry import earth
+from alignment_core.geometry.rotations import relative_rotvec_batch
 from alignment_core.samples import (
     AircraftTruth,
     DopplerSample,
@@ -158,8 +159,9 @@ def run(sc: Scenario, keep_truth: bool = True) -> BatchResult:
     filt = align(sc, inp)
     truths: list[AircraftTruth] = []
     if keep_truth:
-        t, mu = inp.truth, inp.sensor_truth['mounting']
+        t = inp.truth
+        rel = relative_rotvec_batch(inp.ships.q_nb, t['q_nb'])
         truths = [AircraftTruth(t_ns=int(inp.ships.t_ns[k]), p_w=t['p_w'][k], q_nb=t['q_nb'][k],
-                                v_b=t['v_b'][k], w_b=t['w_b'][k], misalignment=mu,
+                                v_b=t['v_b'][k], w_b=t['w_b'][k], misalignment=rel[k],
                                 on_deck=bool(t['on_deck'][k])) for k in range(len(inp.ships))]
     return BatchResult(sc, list(filt.outputs), truths, filt, time.perf_counter() - wall)

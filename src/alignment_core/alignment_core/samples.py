@@ -66,7 +66,9 @@ class LdvSample:
 
 @dataclass(frozen=True, slots=True)
 class AircraftTruth:
-    """Aircraft truth (/truth/aircraft/odom and /truth/misalignment)."""
+    """Aircraft truth (/truth/aircraft/odom and /truth/misalignment). misalignment: (3,) rad, the
+    IMU axes relative to the master's (ship body) axes, rotation vector: the mounting plus the
+    deck's flexure and the airframe's motion on its gear, what the filter estimates."""
     t_ns: int
     p_w: np.ndarray
     q_nb: np.ndarray

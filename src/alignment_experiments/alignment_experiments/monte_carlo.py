@@ -24,6 +24,7 @@ from scipy.spatial.transform import Rotation
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
+from alignment_core.geometry.rotations import relative_rotvec_batch
 from alignment_core.units import ARCMIN
 
 from .statistics import nees, settling_time
@@ -67,7 +68,7 @@ def true_misalignment(inp: pipeline.Inputs) -> np.ndarray:
     """(K, 3) rad: the aircraft IMU axes relative to the master's (ship body) axes at every ship
     sample, from the truth attitudes (mounting, static and dynamic flexure); held at its
     release value once the aircraft has left the deck (the filter's estimate is held too)."""
-    rel = (Rotation.from_quat(inp.ships.q_nb).inv() * Rotation.from_quat(inp.truth['q_nb'])).as_rotvec()
+    rel = relative_rotvec_batch(inp.ships.q_nb, inp.truth['q_nb'])
     on = np.asarray(inp.truth['on_deck'], dtype=bool)
     if np.any(on) and not np.all(on):
         last = int(np.flatnonzero(on)[-1])

@@ -249,7 +249,8 @@ def _summary(run: Run, sc: core_scenario.Scenario, wall: float) -> dict | None:
         s = summary.summarise(bag, bag, sc.start_time_s, sc.duration_s, wall,
                               published_counts(run.out, with_held=True),
                               run.foreign_publishers(ours), run.problems,
-                              published_known=not run.unknown_counts())
+                              published_known=not run.unknown_counts(),
+                              latency_s=sc.filter.master_latency_s)
     except (BagError, OSError) as e:
         summary.write({'complete': False, 'lost_total': None,
                        'problems': [*run.problems, f'no bag to read: {e}'],

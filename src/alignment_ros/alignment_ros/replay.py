@@ -191,7 +191,8 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
         s = summary.summarise(bag, out / 'bag', start_ns * 1e-9, (end_ns - start_ns) * 1e-9, wall,
                               published_counts(out, with_held=True),
                               run.foreign_publishers({FILTER}), run.problems,
-                              published_known=not run.unknown_counts(), truth=has_truth)
+                              published_known=not run.unknown_counts(), truth=has_truth,
+                              latency_s=node_scenario(given, NODE_SCOPES[FILTER]).filter.master_latency_s)
         s['replayed_from'] = str(bag)
         summary.write(s, out)
     except (BagError, OSError) as e:

@@ -97,27 +97,29 @@ def whiteness_line(w: dict | None) -> str:
             f"{w['windows']} windows failed); relative velocity: {w['relative_velocity']}")
 
 
-def truth_from_bag(bag: Path, until_ns: int | None = None) -> tuple[int, np.ndarray]:
-    """The last /truth/misalignment (stamped at or before until_ns, if given): stamp, vector."""
+def truth_from_bag(bag: Path, until_ns: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Every /truth/misalignment stamped at or before until_ns (if given): stamps (K,) ns and
+    vectors (K, 3) rad; ValueError if there is none."""
     d = [m for m in _read(bag, (topics.TRUTH_MISALIGNMENT,))[topics.TRUTH_MISALIGNMENT]
          if until_ns is None or to_ns(m.header.stamp) <= until_ns]
     if not d:
         raise ValueError(f'{bag}: no {topics.TRUTH_MISALIGNMENT} messages')
-    m = d[-1]
-    return to_ns(m.header.stamp), np.array([m.vector.x, m.vector.y, m.vector.z])
+    return (np.array([to_ns(m.header.stamp) for m in d], dtype=np.int64),
+            np.array([[m.vector.x, m.vector.y, m.vector.z] for m in d]))
 
 
 def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: float,
               wall_time_s: float, published: dict[str, int] | None = None,
               foreign_publishers: dict[str, list[str]] | None = None,
               problems: list[str] | None = None, published_known: bool = True,
-              truth: bool = True) -> dict:
+              truth: bool = True, latency_s: float = 0.0) -> dict:
     """The summary of a run of `duration_s` simulated seconds from `start_s`: the score (None
     when there is nothing to score), counts, losses, foreign messages, and whether the run is
     complete (no message lost or foreign, outputs up to the end, no `problems` the launcher
     saw). The simulated time claimed is the one the filter's outputs reached; published_known
     False: some publishers' counts are missing (more may be lost than `lost` says); `truth`
-    False: the input has no truth (the last estimate and its 1-sigma are reported instead)."""
+    False: the input has no truth (the last estimate and its 1-sigma are reported instead);
+    latency_s: the master latency the filter is told (its estimates' time of validity)."""
     end_ns = round((start_s + duration_s) * 1e9)
     until_ns = end_ns + 1000                   # 1 us: the end given as float seconds
     est = estimates_from_bag(estimate_bag)
@@ -126,7 +128,8 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     est = {k: v[:n_kept] for k, v in est.items()}
     problems = list(problems or [])
     air = air_data_summary.score(estimate_bag)
-    score = (_score(truth_bag, est, problems, optional=air is not None, until_ns=until_ns) if truth
+    score = (_score(truth_bag, est, problems, optional=air is not None, until_ns=until_ns,
+                    latency_ns=round(latency_s * 1e9)) if truth
              else _estimate_only(est, problems))
     own = topic_counts(estimate_bag)
     counts = {**topic_counts(truth_bag), **own} if Path(truth_bag) != Path(estimate_bag) else own
@@ -169,19 +172,24 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
 
 
 def _score(truth_bag: Path, est: dict[str, np.ndarray], problems: list[str], optional: bool = False,
-           until_ns: int | None = None) -> dict:
-    """Truth and estimate at the end of deck matching (None and a problem if unavailable;
-    `optional`: a run with air data and no deck phase has no misalignment to score)."""
+           until_ns: int | None = None, latency_ns: int = 0) -> dict:
+    """The last estimate of deck matching against the truth at its time of validity (its stamp
+    less the master latency the filter is told; the relative attitude moves on the gear and a
+    flexing deck); None and a problem if unavailable (`optional`: a run with air data and no
+    deck phase has no misalignment to score)."""
     try:
-        t_rel, mu = truth_from_bag(truth_bag, until_ns)
+        t_truth, truth = truth_from_bag(truth_bag, until_ns)
     except ValueError as e:
         if not optional:
             problems.append(f'nothing to score: {e}')
         return dict.fromkeys(SCORE_KEYS)
+    t_rel = int(t_truth[-1])
     i = int(np.searchsorted(est['t_ns'], t_rel, side='right')) - 1
     if i < 0:
         problems.append('nothing to score: no filter output before the end of deck matching')
         return dict.fromkeys(SCORE_KEYS)
+    k = min(int(np.searchsorted(t_truth, int(est['t_ns'][i]) - latency_ns)), len(t_truth) - 1)
+    mu = truth[k]
     return {
         'misalignment_truth_rad': mu.tolist(),
         'misalignment_estimate_rad': est['misalignment'][i].tolist(),

@@ -57,6 +57,7 @@ from alignment_core.geometry.rotations import (
     cross,
     quat_mul_batch,
     quat_to_dcm_batch,
+    relative_rotvec_batch,
     right_jacobian,
     rotvec_to_dcm_batch,
 )
@@ -286,8 +287,8 @@ class AircraftKinematics:
     def truth(self, s: ShipSample, tau: float) -> AircraftTruth:
         """Aircraft truth at one ship sample (tau = its time since scenario start)."""
         d = self.truth_batch(ShipBatch.of([s]), np.array([tau]))
-        return AircraftTruth(t_ns=s.t_ns, p_w=d['p_w'][0], q_nb=d['q_nb'][0], v_b=d['v_b'][0],
-                             w_b=d['w_b'][0], misalignment=self.mu.copy(), on_deck=bool(d['on_deck'][0]))
+        return AircraftTruth(t_ns=s.t_ns, p_w=d['p_w'][0], q_nb=d['q_nb'][0], v_b=d['v_b'][0], w_b=d['w_b'][0],
+                             misalignment=relative_rotvec_batch(s.q_nb, d['q_nb'][0]), on_deck=bool(d['on_deck'][0]))
 
     def increments_batch(self, s0: ShipBatch, s1: ShipBatch, tau0: np.ndarray, tau1: np.ndarray
                          ) -> tuple[np.ndarray, np.ndarray]:

@@ -21,6 +21,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 Floats = Sequence[float]
 
@@ -263,3 +264,12 @@ def slerp(q0: np.ndarray, q1: np.ndarray, f: float) -> np.ndarray:
     a = floats(q0)
     rx, ry, rz = quat_to_rotvec_f(quat_mul_f((-a[0], -a[1], -a[2], a[3]), floats(q1)))
     return np.array(normalized_f(quat_mul_f(a, rotvec_to_quat_f(f * rx, f * ry, f * rz))))
+
+
+def relative_rotvec_batch(q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+    """(..., 3) rotation vector of q_a^-1 q_b, frame b relative to frame a (both (..., 4)): the
+    aircraft IMU axes relative to the master's, the misalignment the filter estimates."""
+    a, b = np.broadcast_arrays(np.asarray(q_a, dtype=float), np.asarray(q_b, dtype=float))
+    shape = a.shape[:-1]
+    rel = Rotation.from_quat(a.reshape(-1, 4)).inv() * Rotation.from_quat(b.reshape(-1, 4))
+    return rel.as_rotvec().reshape(*shape, 3)
