@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 import pytest
+from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Empty
 from support.ros_driving import spin_until
@@ -71,3 +72,38 @@ def test_the_clock_source_does_not_listen_to_its_own_clock(ros):
     spin_until(node, lambda: time.monotonic() > t_end)
     readers = [i.node_name for i in node.get_subscriptions_info_by_topic(topics.CLOCK)]
     assert 'ship_motion_node' not in readers
+
+
+def test_the_ship_runs_no_further_than_its_lead_ahead_of_a_paced_stream(ros):
+    """With pace_topics, the ship (even at real_time_factor 0) sends a sample only while the
+    paced stream is within max_lead_s of it: nothing on the stream, it stops at t0 + lead; the
+    stream at t0 + 1 s lets it on to t0 + 1 s + lead, and no further."""
+    node, start = ros
+    sc = scenario.load('catapult', {'duration_s': 20.0})
+    got: list[float] = []
+    sub = node.create_subscription(Clock, topics.CLOCK, lambda m: got.append(convert.to_ns(m.clock) * 1e-9),
+                                   qos.STREAM)
+    paced = node.create_publisher(Odometry, topics.TRUTH_AIRCRAFT_ODOM, qos.STREAM)
+    start('ship_motion_node', '-p', f'wait_subscribers:=["{topics.CLOCK}:1","{GO}:1"]',
+          '-p', f'pace_topics:=["{topics.TRUTH_AIRCRAFT_ODOM}"]', '-p', 'max_lead_s:=0.5',
+          sets={'real_time_factor': 0.0, 'duration_s': 20.0})
+    spin_until(node, lambda: sub.get_publisher_count() >= 1 and paced.get_subscription_count() >= 1)
+    node.create_subscription(Empty, GO, lambda m: None, qos.STREAM)
+    t0 = sc.t0_ns * 1e-9
+    spin_until(node, lambda: got and got[-1] >= t0 + 0.5 - 1e-9)
+    spin_for(node, 1.5)
+    assert got[-1] == pytest.approx(t0 + 0.5, abs=1e-9)          # held at the lead
+    m = Odometry()
+    m.header.stamp = convert.stamp(sc.t0_ns + 1_000_000_000)
+    paced.publish(m)
+    spin_until(node, lambda: got[-1] >= t0 + 1.5 - 1e-9)
+    spin_for(node, 1.5)
+    assert got[-1] == pytest.approx(t0 + 1.5, abs=1e-9)
+    assert len(got) == 151                                          # every sample once, none skipped
+
+
+def spin_for(node, seconds: float) -> None:
+    import rclpy
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.05)

@@ -55,11 +55,14 @@ from .signals import Interrupted, SignalGuard
 MATCHED = {
     'ship_motion_node': {topics.CLOCK: 1, topics.SHIP_ODOM: 4, topics.SHIP_ACCEL: 2, topics.SHIP_FIX: 1},
     'master_ins_node': {topics.MASTER_ODOM: 2, topics.MASTER_FIX: 1, topics.TRUTH_MASTER_ERROR: 1},
-    'slave_ins_node': {topics.AIRCRAFT_IMU: 2, topics.TRUTH_AIRCRAFT_ODOM: 2, topics.TRUTH_MISALIGNMENT: 1,
+    'slave_ins_node': {topics.AIRCRAFT_IMU: 2, topics.TRUTH_AIRCRAFT_ODOM: 3, topics.TRUTH_MISALIGNMENT: 1,
                        topics.TRUTH_IMU_BIAS: 1},
     'ldv_node': {topics.LDV_TWIST: 2, topics.DOPPLER_TWIST: 2},   # filter + recorder
     'alignment_filter_node': {t: 1 for t in topics.FILTER_OUTPUT_TOPICS},
 }
+# the ship runs at most its max_lead_s ahead of these (the LDV pairs the ship's odometry with the
+# slave's truth: without the bound it buffers the ship's for as long as the slave lags)
+PACE_TOPICS = (topics.TRUTH_AIRCRAFT_ODOM,)
 NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node')
 AIR_DATA_TOPICS = (*topics.FADS_PORT_TOPICS, topics.AIR_DATA_VELOCITY, topics.AIR_DATA_STATIC_PRESSURE,
                    topics.AIR_DATA_TOTAL_PRESSURE, topics.AIR_DATA_WIND, topics.AIR_DATA_STATE,
@@ -216,7 +219,8 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
         for n in nodes_of(sc):
             start(run, n, params, matched=matched)
         start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',
-              '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']))
+              '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']),
+              '-p', 'pace_topics:=[' + ','.join(f'"{t}"' for t in PACE_TOPICS) + ']')
         timeout = a.timeout or 120.0 + 3.0 * sc.duration_s
         deadline = time.monotonic() + timeout
         while rec.poll() is None and not end_reached.is_set():

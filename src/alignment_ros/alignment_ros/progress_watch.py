@@ -20,15 +20,12 @@ from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64MultiArray
 
-from . import state_layout, topics
+from . import qos, state_layout, topics
 from .convert import to_ns
 from .progress import Progress
-
-WATCH_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
 class GraphWatcher:
@@ -51,10 +48,10 @@ class GraphWatcher:
         node = Node(self.node_name, context=self._ctx, start_parameter_services=False,
                     enable_rosout=False)
         if self.clock:
-            node.create_subscription(Clock, topics.CLOCK, self._on_clock, WATCH_QOS)
-        node.create_subscription(Vector3Stamped, topics.ALIGN_MISALIGNMENT, self._on_estimate, WATCH_QOS)
-        node.create_subscription(Float64MultiArray, topics.ALIGN_STATE, self._on_state, WATCH_QOS)
-        node.create_subscription(Float64MultiArray, topics.AIR_DATA_STATE, self._on_air_data, WATCH_QOS)
+            node.create_subscription(Clock, topics.CLOCK, self._on_clock, qos.WATCH)
+        node.create_subscription(Vector3Stamped, topics.ALIGN_MISALIGNMENT, self._on_estimate, qos.WATCH)
+        node.create_subscription(Float64MultiArray, topics.ALIGN_STATE, self._on_state, qos.WATCH)
+        node.create_subscription(Float64MultiArray, topics.AIR_DATA_STATE, self._on_air_data, qos.WATCH)
         executor = SingleThreadedExecutor(context=self._ctx)
         executor.add_node(node)
 

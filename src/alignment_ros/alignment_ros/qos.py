@@ -19,3 +19,7 @@ DIAGNOSTICS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
 )
+
+WATCH = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
+"""A watcher of a stream's progress (the live progress line, the ship's lead): best effort, the
+latest few only; it never holds a writer back."""

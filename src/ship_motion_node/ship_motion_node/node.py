@@ -13,7 +13,9 @@ from sensor_msgs.msg import NavSatFix
 
 from alignment_core import pipeline, run_out
 from alignment_core.validation import ConfigError
-from alignment_ros import convert, node_util, topics
+from alignment_ros import convert, node_util, qos, topics
+from alignment_ros.bag import stamp_reader
+from alignment_ros.pacing import LeadLimit
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
 CHUNK = 25   # ship samples computed at once (0.25 s at 100 Hz)
@@ -35,9 +37,16 @@ class ShipMotionNode(node_util.CountingNode):
             description='give up waiting for subscribers after this many wall seconds'))
         self.declare_parameter('fix_decimation', 10, ParameterDescriptor(
             description='publish /ship/fix every N samples'))
+        self.declare_parameter('pace_topics', [''], ParameterDescriptor(
+            description='stamped streams downstream (one message per ship sample, e.g. '
+                        '/truth/aircraft/odom) the ship may not run more than max_lead_s ahead of'))
+        self.declare_parameter('max_lead_s', 5.0, ParameterDescriptor(
+            description='simulated seconds the ship may run ahead of pace_topics (> 0)'))
         self.add_on_set_parameters_callback(self._check)
         if self.get_parameter('real_time_factor').value < 0:
             raise ConfigError('real_time_factor must be >= 0')
+        if not self.get_parameter('max_lead_s').value > 0:
+            raise ConfigError('max_lead_s must be > 0')
         self.sc = ScenarioParameters(self, NODE_SCOPES['ship_motion_node']).scenario
         self.source = pipeline.ship_source(self.sc)
         self.plane = pipeline.plane_of(self.sc)
@@ -45,6 +54,36 @@ class ShipMotionNode(node_util.CountingNode):
         self.stream_publisher(Odometry, topics.SHIP_ODOM)
         self.stream_publisher(AccelStamped, topics.SHIP_ACCEL)
         self.stream_publisher(NavSatFix, topics.SHIP_FIX)
+        self.lead = self._watch([t for t in self.get_parameter('pace_topics').value if t])
+        self.pace_waits = 0
+        self.pace_wait_s = 0.0
+
+    def _watch(self, names: list[str]) -> LeadLimit | None:
+        """Best-effort, latest-only subscriptions to the paced streams (they hold nothing back)."""
+        if not names:
+            return None
+        unknown = [t for t in names if t not in topics.TOPIC_TYPES or stamp_reader(topics.TOPIC_TYPES[t]) is None]
+        if unknown:
+            raise ConfigError(f'pace_topics: not stamped topics of the graph: {unknown}')
+        lead = LeadLimit(names, round(self.get_parameter('max_lead_s').value * 1e9), self.sc.t0_ns)
+        for t in names:
+            read = stamp_reader(topics.TOPIC_TYPES[t])
+            self.create_subscription(topics.msg_class(topics.TOPIC_TYPES[t]), t,
+                                     lambda data, t=t, read=read: lead.note(t, read(data)), qos.WATCH, raw=True)
+        return lead
+
+    def _keep_lead(self, t_ns: int, stop) -> None:
+        """Wait (spinning) until every paced stream is within the lead of t_ns."""
+        if self.lead is None or not self.lead.behind(t_ns):
+            return
+        self.pace_waits += 1
+        w0 = time.monotonic()
+        while self.lead.behind(t_ns) and not stop():
+            self.executor_ref.spin_once(timeout_sec=0.01)
+        self.pace_wait_s += time.monotonic() - w0
+
+    def stats(self) -> dict:
+        return {**super().stats(), 'pace_waits': self.pace_waits, 'pace_wait_s': round(self.pace_wait_s, 3)}
 
     def _check(self, params) -> SetParametersResult:
         for p in params:
@@ -96,6 +135,7 @@ class ShipMotionNode(node_util.CountingNode):
                 ks = np.arange(k, min(k + CHUNK, n))
                 chunk = self.source.samples((ks * sc.dt_ns) / 1e9, sc.t0_ns, sc.dt_ns, k0=k)[::-1]
             s = chunk.pop()
+            self._keep_lead(s.t_ns, stop)
             clk = Clock()
             clk.clock = convert.stamp(s.t_ns)
             self.send(topics.CLOCK, clk)
