@@ -1,4 +1,5 @@
-"""The QoS ``ros2 bag play`` offers for each topic: recorded offer, or ``--qos-profile-overrides-path``.
+"""Bag QoS: what the recorder subscribes with and stores of the publishers' offers, and what
+``ros2 bag play`` offers for each topic: recorded offer, or ``--qos-profile-overrides-path``.
 
 rosbag2 (Jazzy) offers what the recorded publishers offered (metadata.yaml's
 ``offered_qos_profiles``) with the history reset to KEEP_LAST 10; when the recorded publishers
@@ -15,14 +16,18 @@ from typing import Any
 import yaml
 from rclpy.duration import Duration
 from rclpy.qos import (
+    DurabilityPolicy,
+    HistoryPolicy,
     InvalidQoSProfileException,
     QoSDurabilityPolicy,
     QoSHistoryPolicy,
     QoSLivelinessPolicy,
     QoSProfile,
     QoSReliabilityPolicy,
+    ReliabilityPolicy,
 )
 
+NS = 1_000_000_000
 DEFAULT_DEPTH = 10
 """rmw_qos_profile_default's depth: rosbag2's default offer and the depth of adapted offers."""
 
@@ -141,3 +146,38 @@ def adapt_recorded(offers: list[dict[str, Any]]) -> QoSProfile:
     first.history = QoSHistoryPolicy.KEEP_LAST
     first.depth = DEFAULT_DEPTH
     return first
+
+
+# --- what the recorder subscribes with and stores ---------------------------------------------
+
+def qos_dict(q: QoSProfile) -> dict[str, Any]:
+    """An offered QoS profile as rosbag2 (metadata version 9) stores it."""
+    def dur(d: Any) -> dict[str, int]:
+        return {'sec': d.nanoseconds // NS, 'nsec': d.nanoseconds % NS}
+    return {'history': q.history.name.lower(), 'depth': q.depth,
+            'reliability': q.reliability.name.lower(), 'durability': q.durability.name.lower(),
+            'deadline': dur(q.deadline), 'lifespan': dur(q.lifespan),
+            'liveliness': q.liveliness.name.lower(),
+            'liveliness_lease_duration': dur(q.liveliness_lease_duration),
+            'avoid_ros_namespace_conventions': q.avoid_ros_namespace_conventions}
+
+
+def endpoints_hash(infos: list[Any]) -> str:
+    """The publishers' common type hash 'RIHS01_...' ('' if none or if they disagree)."""
+    hashes = {(i.topic_type_hash.version, bytes(i.topic_type_hash.value)) for i in infos
+              if i.topic_type_hash.version > 0}
+    if len(hashes) != 1:
+        return ''
+    version, value = hashes.pop()
+    return f'RIHS{version:02d}_{value.hex()}' if version == 1 else ''
+
+
+def adapted_qos(infos: list[Any]) -> QoSProfile:
+    """Subscription QoS compatible with every publisher (rosbag2's rule), KEEP_ALL history."""
+    reliable = bool(infos) and all(i.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+                                   for i in infos)
+    latched = bool(infos) and all(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
+                                  for i in infos)
+    return QoSProfile(history=HistoryPolicy.KEEP_ALL,
+                      reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)

@@ -242,11 +242,25 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
     return time.monotonic() - wall0
 
 
+def _short_of_the_end(stats: dict, end_topics: tuple[str, ...], end_s: float) -> str:
+    """Which end topics the recorder had not seen reach the end when the run timed out (their
+    last stamps as recorded by the time it stopped, and how many messages it took only then)."""
+    last = stats.get('last_stamp_ns', {})
+    short = [f'{t} (last {last[t] * 1e-9:.2f} s)' if t in last else f'{t} (none)'
+             for t in end_topics if last.get(t, -1) < round(end_s * 1e9)]
+    where = ', '.join(short) if short else 'none by the time the recorder stopped'
+    return (f'end topics short of t = {end_s:.2f} s: {where}; taken by the recorder only at its stop: '
+            f'{stats.get("taken_directly", "unknown")}')
+
+
 def _summary(run: Run, sc: core_scenario.Scenario, wall: float) -> dict | None:
     """Write summary.json (for a cut run too: complete false); return it, or None if there is
     no bag to read."""
     bag = run.out / 'bag'
     ours = {n for n in run.procs if n != 'recorder'}
+    if run.failure is not None and run.failure.startswith('run did not finish'):
+        run.problems.append(_short_of_the_end(run.recorder_stats(), end_topics_of(sc),
+                                              sc.start_time_s + sc.duration_s))
     for node, n in unpaired_drops(run.out).items():
         run.problems.append(f'{node} dropped {n} unpaired half-samples (its input fell too far behind)')
     try:

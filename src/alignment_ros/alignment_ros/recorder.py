@@ -53,11 +53,12 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from alignment_ros.bag import BagError, BagWriter, stamp_reader
+from alignment_ros.bag_qos import adapted_qos, endpoints_hash, qos_dict
 from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.record_options import TopicFilter, parse_args
@@ -71,39 +72,6 @@ FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed r
 PUBLISHERS_INTERVAL_S = 1.0  # the recorded topics' publishers are looked up this often
 WALL_STAMPED = ('/rosout', '/parameter_events')   # rcl stamps these with the wall clock
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # rmw's name of a node not yet discovered
-
-
-def qos_dict(q: QoSProfile) -> dict[str, Any]:
-    """An offered QoS profile as rosbag2 (metadata version 9) stores it."""
-    def dur(d: Any) -> dict[str, int]:
-        return {'sec': d.nanoseconds // NS, 'nsec': d.nanoseconds % NS}
-    return {'history': q.history.name.lower(), 'depth': q.depth,
-            'reliability': q.reliability.name.lower(), 'durability': q.durability.name.lower(),
-            'deadline': dur(q.deadline), 'lifespan': dur(q.lifespan),
-            'liveliness': q.liveliness.name.lower(),
-            'liveliness_lease_duration': dur(q.liveliness_lease_duration),
-            'avoid_ros_namespace_conventions': q.avoid_ros_namespace_conventions}
-
-
-def endpoints_hash(infos: list[Any]) -> str:
-    """The publishers' common type hash 'RIHS01_...' ('' if none or if they disagree)."""
-    hashes = {(i.topic_type_hash.version, bytes(i.topic_type_hash.value)) for i in infos
-              if i.topic_type_hash.version > 0}
-    if len(hashes) != 1:
-        return ''
-    version, value = hashes.pop()
-    return f'RIHS{version:02d}_{value.hex()}' if version == 1 else ''
-
-
-def adapted_qos(infos: list[Any]) -> QoSProfile:
-    """Subscription QoS compatible with every publisher (rosbag2's rule), KEEP_ALL history."""
-    reliable = bool(infos) and all(i.qos_profile.reliability == ReliabilityPolicy.RELIABLE
-                                   for i in infos)
-    latched = bool(infos) and all(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
-                                  for i in infos)
-    return QoSProfile(history=HistoryPolicy.KEEP_ALL,
-                      reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
 
 
 def read_expected(path: Path) -> dict[str, int] | None:

@@ -79,6 +79,7 @@ class ShipMotionNode(node_util.CountingNode):
         self.pace_waits += 1
         w0 = time.monotonic()
         while self.lead.behind(t_ns) and not stop():
+            self.flush_held()        # what waits for its subscribers to match may be what is awaited
             self.executor_ref.spin_once(timeout_sec=0.01)
         self.pace_wait_s += time.monotonic() - w0
 
