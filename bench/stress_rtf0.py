@@ -67,7 +67,11 @@ def one_run(out: Path, rtf: float, scenario: str, sets: list[str], timeout: floa
          'publish_waits': publish_waits(out) if (out / 'stats').exists() else 0, 'reason': ''}
     summary = out / 'summary.json'
     if rc == 0 and summary.exists():
-        r['lost_total'] = json.loads(summary.read_text())['lost_total']
+        sm = json.loads(summary.read_text())
+        r['lost_total'] = sm['lost_total']
+        r['estimate'] = sm.get('misalignment_estimate_rad')
+        ship = out / 'stats' / 'ship_motion_node.json'
+        r['pace_waits'] = json.loads(ship.read_text()).get('pace_waits', 0) if ship.exists() else 0
     else:
         r['failed'] = True
         r['reason'] = failure_reason(out, stderr) if out.exists() else stderr.strip()[-200:]
@@ -94,7 +98,8 @@ def main() -> int:
         for i in range(a.runs):
             r = one_run(base / f'run{i:03d}', a.rtf, a.scenario, sets, a.timeout)
             results.append(r)
-            status = f'FAILED ({r["reason"]})' if r['failed'] else f'ok, lost {r["lost_total"]}'
+            status = (f'FAILED ({r["reason"]})' if r['failed'] else
+                      f'ok, lost {r["lost_total"]}, ship lead waits {r["pace_waits"]}')
             print(f'run {i + 1}/{a.runs}: {r["wall_s"]:.1f} s, publish waits {r["publish_waits"]}, '
                   f'{status}', flush=True)
     finally:
@@ -105,7 +110,9 @@ def main() -> int:
     lost = sum(r['lost_total'] or 0 for r in results)
     print(f'rtf {a.rtf:g}, load {a.load}, {" ".join(sets)}: {failed} of {len(results)} runs failed, '
           f'{lost} messages lost in the {len(results) - failed} that finished, '
-          f'{sum(r["publish_waits"] for r in results)} publishes waited')
+          f'{sum(r["publish_waits"] for r in results)} publishes waited; '
+          f'{len({json.dumps(r.get("estimate")) for r in results if not r["failed"]})} distinct final estimate(s) '
+          'among them (the same scenario and seed: 1)')
     if a.json:
         a.json.write_text(json.dumps(results, indent=1))
     return 1 if failed or lost else 0
