@@ -51,11 +51,11 @@ def test_spot_acceleration_is_exact_for_a_quadratic_velocity():
     t_end = 0.0
     for k in range(40):                      # 0.78 s at 50 Hz: below 0.8 of the window, no value
         t_end = 0.02 * k
-        acc.add(int(round(t_end * 1e9)), v0 + a * t_end + 0.5 * j * t_end ** 2)
+        acc.add(int(round(t_end * 1e9)), np.eye(3), v0 + a * t_end + 0.5 * j * t_end ** 2, np.zeros(3), np.zeros(3))
     assert acc.acceleration() is None
     for k in range(40, 120):
         t_end = 0.02 * k
-        acc.add(int(round(t_end * 1e9)), v0 + a * t_end + 0.5 * j * t_end ** 2)
+        acc.add(int(round(t_end * 1e9)), np.eye(3), v0 + a * t_end + 0.5 * j * t_end ** 2, np.zeros(3), np.zeros(3))
     np.testing.assert_allclose(acc.acceleration(), a + j * t_end, atol=1e-9)
     acc.clear()
     assert acc.acceleration() is None

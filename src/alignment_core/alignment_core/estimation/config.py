@@ -115,6 +115,9 @@ class FilterConfig:
     # deck spot's acceleration fitted to the master samples over reference_force_window_s
     specific_force: Literal['slave', 'reference'] = 'slave'
     reference_force_window_s: float = 1.0
+    # the delay state's column (models/master_delay.py): slave: the slave's acceleration parked, two master
+    # samples differenced moving; reference: the same fit as specific_force's, parked and moving
+    delay_acceleration: Literal['slave', 'reference'] = 'slave'
 
     def validate(self) -> None:
         for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
@@ -236,6 +239,8 @@ class FilterConfig:
                 f"every update, and the rate rows start at the second master sample")
         require(self.specific_force in ('slave', 'reference'),
                 f"specific_force must be 'slave' or 'reference', got {self.specific_force!r}")
+        require(self.delay_acceleration in ('slave', 'reference'),
+                f"delay_acceleration must be 'slave' or 'reference', got {self.delay_acceleration!r}")
         require(self.specific_force == 'slave' or (m not in NONLINEAR_MODELS and m not in DOPPLER_MODELS),
                 f"specific_force reference needs a linear model without the Doppler stream, got {m}")
         require(not self.master_delay_state or (m not in NONLINEAR_MODELS and m not in DOPPLER_MODELS),

@@ -117,13 +117,10 @@ class ImuEvents:
         if not self._health.running:
             return
         f_model = f_n
-        if self._spot_accel is not None:
-            if self._launch.moving:
-                self._spot_accel.clear()
-            else:
-                a_spot = self._spot_accel.acceleration()
-                if a_spot is not None:
-                    f_model = reference_specific_force(f_n, a_spot, st.v_n, ins.w_ie, ins.w_en)
+        if self._spot_accel is not None and self._cfg.specific_force == 'reference' and not self._launch.moving:
+            a_spot = self._spot_accel.acceleration()
+            if a_spot is not None:
+                f_model = reference_specific_force(f_n, a_spot, st.v_n, ins.w_ie, ins.w_en)
         p = live.prop = Propagation(ins.c_start, f_model, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
         qd = self._model.process_noise(h)
         t_launch = self._launch.t_launch_ns

@@ -25,26 +25,31 @@ MIN_FILL = 0.8
 
 
 class SpotAcceleration:
-    """Causal estimate of the deck spot's nav-frame acceleration (3,) m/s^2 from the reference
-    velocities of the master samples (module docstring)."""
+    """Causal estimate of the deck spot's nav-frame acceleration (3,) m/s^2 from the master
+    samples (module docstring): the spot's velocity C_m (v_m + w_m x r) of every sample in the
+    window, with the newest sample's lever arm r (the master's part of the reference: the LDV's
+    relative velocity is not the spot's), fitted by a quadratic in time."""
 
     def __init__(self, window_s: float) -> None:
         if not window_s > 0.0:
             raise ValueError(f'window_s must be > 0, got {window_s}')
         self._window_ns = int(round(window_s * 1e9))
-        self._samples: deque[tuple[int, np.ndarray]] = deque()
+        self._samples: deque[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = deque()   # t, C_m, v_b, w_b
+        self._r = np.zeros(3)
         self._value: np.ndarray | None = None
 
     def clear(self) -> None:
-        """Forget the samples (a gap, the aircraft moving): no value until the window refills."""
+        """Forget the samples (a gap): no value until the window refills."""
         self._samples.clear()
         self._value = None
 
-    def add(self, t_ns: int, v_spot_n: np.ndarray) -> None:
-        """One reference velocity (3,) m/s, nav frame, valid at t_ns (increasing times)."""
+    def add(self, t_ns: int, c_m: np.ndarray, v_b: np.ndarray, w_b: np.ndarray, r: np.ndarray) -> None:
+        """One master sample valid at t_ns (increasing times; an older or equal one is ignored):
+        attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m."""
         if self._samples and t_ns <= self._samples[-1][0]:
             return
-        self._samples.append((t_ns, np.asarray(v_spot_n, dtype=float)))
+        self._samples.append((t_ns, c_m, v_b, w_b))
+        self._r = np.asarray(r, dtype=float)
         while t_ns - self._samples[0][0] > self._window_ns:
             self._samples.popleft()
         self._value = None
@@ -57,9 +62,9 @@ class SpotAcceleration:
         s = self._samples
         if len(s) < 4 or s[-1][0] - s[0][0] < MIN_FILL * self._window_ns:
             return None
-        t_end = s[-1][0]
-        tau = np.array([(t - t_end) * 1e-9 for t, _ in s])
-        v = np.array([x for _, x in s])
+        t_end, r = s[-1][0], self._r
+        tau = np.array([(t - t_end) * 1e-9 for t, _, _, _ in s])
+        v = np.array([c @ (vb + np.cross(wb, r)) for _, c, vb, wb in s])
         a = np.column_stack([np.ones_like(tau), tau, tau * tau])
         coef, *_ = np.linalg.lstsq(a, v, rcond=None)
         self._value = coef[1]
