@@ -79,3 +79,46 @@ def test_reference_force_options_are_validated():
         scenario.load('carrier_deck', {'filter.reference_force_window_s': 0.0})
     with pytest.raises(ConfigError, match='specific_force reference'):
         scenario.load('seed001', {'filter.specific_force': 'reference'})
+
+
+def test_spot_acceleration_takes_the_lever_arm_of_the_newest_sample():
+    # a ship turning at a constant rate w about up, at rest otherwise: the spot at r moves on a circle,
+    # v = C(t) (w x r) and a = C(t) (w x (w x r)), the centripetal -w^2 r_h (closed form)
+    w = 0.05
+    r = np.array([40.0, -10.0, 15.0])
+    acc = SpotAcceleration(1.0)
+    t_end = 0.0
+    for k in range(51):
+        t_end = 0.02 * k
+        c, s = np.cos(w * t_end), np.sin(w * t_end)
+        c_m = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        # an older, wrong lever arm before the last sample: the fit uses the newest one only
+        acc.add(int(round(t_end * 1e9)), c_m, np.zeros(3), np.array([0.0, 0.0, w]), r if k == 50 else 2.0 * r)
+    expected = c_m @ np.cross([0.0, 0.0, w], np.cross([0.0, 0.0, w], r))
+    # the quadratic fit's truncation: a cubic c t^3 over [-T, 0] fits with the end slope -0.6 c T^2
+    # (its least-squares projection), so 0.1 |v'''| T^2 = 0.1 w^4 |r_h| T^2 = 2.6e-5 m/s^2 at T = 1 s
+    err = np.linalg.norm(acc.acceleration() - expected)
+    assert err < 0.1 * w ** 4 * np.linalg.norm(r[:2]) * 1.1
+
+
+def _vector_ldv_delay(acceleration: str) -> tuple[float, float]:
+    """carrier_deck with a vector LDV, the aircraft on its gear (the LDV flags it creeping, so the
+    delay's column is taken as moving), 30 ms of master latency not told: the delay estimate and
+    its sigma (s) after 30 s."""
+    sc = scenario.load('carrier_deck', {'duration_s': 30.0, 'ldv.mode': 'vector', 'master.latency_jitter_s': 0.0,
+                                        'filter.specific_force': 'slave', 'filter.delay_acceleration': acceleration},
+                       seed=2)
+    al = pipeline.align(sc, pipeline.simulate(sc))
+    k = al.state_labels.index('master_delay_s')
+    e = al.outputs[-1]
+    return float(e.state[k]), float(e.sigma[k])
+
+
+def test_the_delay_column_from_the_master_fit_finds_the_latency():
+    # the true delay is the master's 30 ms (no jitter); the column from two master samples 20 ms apart
+    # carries their 1 mm/s velocity noise as 0.07 m/s^2, as large as the deck's acceleration, and the
+    # estimate is pulled toward zero (errors in the regressor)
+    dt, sig = _vector_ldv_delay('reference')
+    assert abs(dt - 0.030) < 3.0 * sig and sig < 0.005
+    dt, sig = _vector_ldv_delay('slave')
+    assert 0.030 - dt > 5.0 * sig
