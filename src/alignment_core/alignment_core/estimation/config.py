@@ -110,6 +110,14 @@ class FilterConfig:
     whiteness_lags: int = 10                  # ... Ljung-Box lags
     whiteness_p: float = 1e-3                 # ... a window whose p-value is below this fails
     ldv_mode: Literal['vector', 'beam'] = 'vector'   # the LDV installed (follows ldv.mode): beam = one row along it
+    # the specific force the error model couples attitude into velocity with (estimation/reference_force.py):
+    # slave: the slave's own (carries g x its tilt error); reference: parked, the horizontal part from the
+    # deck spot's acceleration fitted to the master samples over reference_force_window_s
+    specific_force: Literal['slave', 'reference'] = 'slave'
+    reference_force_window_s: float = 1.0
+    # the delay state's column (models/master_delay.py): slave: the slave's acceleration parked, two master
+    # samples differenced moving; reference: the same fit as specific_force's, parked and moving
+    delay_acceleration: Literal['slave', 'reference'] = 'slave'
 
     def validate(self) -> None:
         for k in ('init_attitude_sigma_deg', 'init_velocity_sigma_mps', 'gyro_bias_sigma_dph',
@@ -124,6 +132,8 @@ class FilterConfig:
                 f"creep_window_samples must be in [3, 10000], got {self.creep_window_samples}")
         require(1 <= self.launch_confirm_samples <= 100,
                 f"launch_confirm_samples must be in [1, 100], got {self.launch_confirm_samples}")
+        require(0.1 <= self.reference_force_window_s <= 10.0,
+                f"reference_force_window_s must be in [0.1, 10] s, got {self.reference_force_window_s}")
         require(self.max_gap_factor > 1.0, f"max_gap_factor must be > 1, got {self.max_gap_factor}")
         self.validate_monitoring()
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
@@ -227,6 +237,12 @@ class FilterConfig:
         require(not (self.rate_matching and a in ('stf', 'stf_multiple')),
                 f"algorithm {a} cannot take rate_matching: its innovation recursion needs the same rows at "
                 f"every update, and the rate rows start at the second master sample")
+        require(self.specific_force in ('slave', 'reference'),
+                f"specific_force must be 'slave' or 'reference', got {self.specific_force!r}")
+        require(self.delay_acceleration in ('slave', 'reference'),
+                f"delay_acceleration must be 'slave' or 'reference', got {self.delay_acceleration!r}")
+        require(self.specific_force == 'slave' or (m not in NONLINEAR_MODELS and m not in DOPPLER_MODELS),
+                f"specific_force reference needs a linear model without the Doppler stream, got {m}")
         require(not self.master_delay_state or (m not in NONLINEAR_MODELS and m not in DOPPLER_MODELS),
                 f"master_delay_state needs a linear model without the Doppler stream, got {m}")
         require(not (self.lever_arm_states and self.lever_arm_treatment != 'compensation'),

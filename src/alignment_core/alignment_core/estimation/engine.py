@@ -29,6 +29,7 @@ from alignment_core.estimation.models.base import DV
 from alignment_core.estimation.models.beam import track_velocity
 from alignment_core.estimation.outputs import Counters, Estimate
 from alignment_core.estimation.publication import EstimateMaker, OdometryMaker, PublishGuard, prior_estimate
+from alignment_core.estimation.reference_force import SpotAcceleration
 from alignment_core.estimation.relative_velocity import ABSENT, LDV, RelativeVelocity
 from alignment_core.estimation.whiteness import InnovationWhiteness
 from alignment_core.geometry import earth
@@ -74,6 +75,11 @@ class TransferAlignment(ImuEvents, EngineViews):
         if self._rel.rigid:
             self._matcher.use_rigid_noise()
         self._track_intervals = self._matcher.tracks_intervals
+        # the deck spot's acceleration from the master (reference_force.py): parked, the error model's
+        # horizontal specific force; the delay state's column
+        self._spot_accel = SpotAcceleration(cfg.reference_force_window_s) \
+            if 'reference' in (cfg.specific_force, cfg.delay_acceleration) else None
+        self._matcher.spot = self._spot_accel
         self._ldv_history = LdvHistory(self._span_ns, cfg.ldv_sigma_mps)
         self._imu_buffer: deque[ImuSample] = deque()       # IMU samples before (re-)anchoring
         self._pending: deque[tuple[int, MasterSample]] = deque()   # (validity time, sample)
@@ -282,6 +288,8 @@ class TransferAlignment(ImuEvents, EngineViews):
         if live is None or reanchor:
             self._anchor(t_v, m, ref)
             return
+        if self._spot_accel is not None:
+            self._spot_accel.add(t_v, ref.c_m, m.v_b, m.w_b, ref.r)
         if ldv is None or not ldv.valid or not self._health.running:
             self._matching = self._health.running and self._results.t_doppler_update == m.t_ns
             return

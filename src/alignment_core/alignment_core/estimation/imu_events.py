@@ -19,6 +19,7 @@ from alignment_core.estimation.launch_detection import LaunchDetector
 from alignment_core.estimation.matching import LiveSolution, Matcher, MatchResults
 from alignment_core.estimation.models import ErrorModel, Propagation
 from alignment_core.estimation.outputs import Counters
+from alignment_core.estimation.reference_force import SpotAcceleration, reference_specific_force
 from alignment_core.estimation.whiteness import InnovationWhiteness
 from alignment_core.navigation.history import SlaveHistory
 from alignment_core.samples import ImuSample
@@ -49,6 +50,7 @@ class ImuEvents:
     _launch_ns: int
     _q_launch: np.ndarray | None
     _track_intervals: bool
+    _spot_accel: SpotAcceleration | None
 
     def _match_pending(self, final: bool = False) -> None:
         raise NotImplementedError          # the engine's (engine.py): match the queued master samples
@@ -114,7 +116,12 @@ class ImuEvents:
         live.history.prune(t - self._span_ns, t)
         if not self._health.running:
             return
-        p = live.prop = Propagation(ins.c_start, f_n, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
+        f_model = f_n
+        if self._spot_accel is not None and self._cfg.specific_force == 'reference' and not self._launch.moving:
+            a_spot = self._spot_accel.acceleration()
+            if a_spot is not None:
+                f_model = reference_specific_force(f_n, a_spot, st.v_n, ins.w_ie, ins.w_en)
+        p = live.prop = Propagation(ins.c_start, f_model, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
         qd = self._model.process_noise(h)
         t_launch = self._launch.t_launch_ns
         if self._q_launch is not None and t_launch is not None and t - t_launch <= self._launch_ns \
@@ -147,6 +154,8 @@ class ImuEvents:
         self._monitor.restart()
         self._whiteness.restart()
         self._matcher.restart(self._imu_rate_hz)
+        if self._spot_accel is not None:
+            self._spot_accel.clear()
         if hl.running:
             try:
                 bridge_covariance(live.kf, self._model, live.prop, gap)

@@ -20,6 +20,7 @@ from alignment_core.estimation.models import Corrections, ErrorModel, Match, Mea
 from alignment_core.estimation.models.base import RateInputs
 from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.outputs import Counters
+from alignment_core.estimation.reference_force import SpotAcceleration
 from alignment_core.geometry.rotations import cross3, quat_conj, quat_mul, quat_to_dcm
 from alignment_core.navigation.history import LdvRecord, SlaveHistory
 from alignment_core.navigation.strapdown import NavState, Strapdown
@@ -117,6 +118,7 @@ class Matcher:
         self.c_nom = None if psi == 0.0 else Rotation.from_rotvec([0.0, 0.0, -psi]).as_matrix()
         # rate matching / delay state: the last IMU intervals and the previous master sample
         self.tracks_intervals = cfg.rate_matching or cfg.master_delay_state
+        self.spot: SpotAcceleration | None = None    # the spot's acceleration fitted to the master samples (engine's)
         self._intervals: deque[tuple[int, float, np.ndarray, np.ndarray]] = deque(
             maxlen=int(span_ns / (1e9 / imu_rate_hz)) + 8)      # (t_end, h, raw gyro rate, dv_n)
         self._prev_master: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None   # t_v, C_m, v_b, w_b
@@ -188,7 +190,11 @@ class Matcher:
         rate_matching.py): the master's nav-frame body rate; the deck spot's acceleration, from the
         slave's velocity change over the IMU interval ending at t_v while parked, else from the
         master's last two samples with today's lever arm and LDV velocity (the undelayed parts);
-        the gyro and master rates over that interval when the previous master sample started it."""
+        the gyro and master rates over that interval when the previous master sample started it.
+        Under delay_acceleration reference the spot's acceleration is the quadratic fit to the
+        master samples (reference_force.py) whenever it has one: the slave's carries the
+        airframe's own motion on its gear, and two master samples 20 ms apart their velocity noise
+        times 70 per m/s (both errors in the regressor pull the delay toward zero)."""
         c_m, r, v_rel = ref.c_m, ref.r, ref.v_rel
         w_n = c_m @ m.w_b
         prev, self._prev_master = self._prev_master, (t_v, c_m, m.v_b, m.w_b)
@@ -206,6 +212,10 @@ class Matcher:
         elif ref.moving and prev is not None and prev[0] < t_v:
             fixed = cross3(m.w_b, r) + v_rel
             a_n = (c_m @ (m.v_b + fixed) - prev[1] @ (prev[2] + cross3(prev[3], r) + v_rel)) / ((t_v - prev[0]) * 1e-9)
+        if self._cfg.delay_acceleration == 'reference' and self.spot is not None:
+            a_fit = self.spot.acceleration()
+            if a_fit is not None:
+                a_n = a_fit
         rate = None
         if self._cfg.rate_matching and iv is not None and prev is not None \
                 and t_v - prev[0] == int(round(iv[1] * 1e9)):

@@ -1,0 +1,80 @@
+"""The specific force the error model couples attitude into velocity with, taken from the
+reference (`filter.specific_force: reference`; docs/carrier.md, "heading on a beam").
+
+The velocity error grows as dV' = [f^n x] phi. The slave's own f^n is C_est f_b = (I - [phi x])
+f_true: its horizontal part carries g x the slave's tilt error, a quantity the filter is itself
+uncertain about. Where the deck's horizontal acceleration is small (a carrier: 0.04-0.08 m/s^2
+RMS, g x 15' of tilt) that product dominates the heading's coupling, and the filter, treating it
+as a known coefficient, credits heading with information it does not have (its heading sigma
+collapses and small unmodelled velocity residuals go into heading). Parked, the aircraft's
+horizontal specific force is the deck spot's (the gear's and the flexure's own accelerations
+are zero-mean vibration), which the master gives independently of the slave's errors:
+    f_h = a_spot,h + [(2 w_ie + w_en) x v]_h,  a_spot = d/dt (v_m + C_m (w_m x r)),
+the derivative of a quadratic least-squares fit over the last `window_s` of master samples,
+taken at the newest (causal; at 1 mm/s of master velocity noise, 50 Hz and 1 s: about 2e-3 m/s^2
+of noise, 5e-3 m/s^2 RMS in all at sea state 5, against g x the slave's tilt error).
+"""
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+MIN_FILL = 0.8
+"""The fit is used once its samples span this fraction of the window (None before)."""
+
+
+class SpotAcceleration:
+    """Causal estimate of the deck spot's nav-frame acceleration (3,) m/s^2 from the master
+    samples (module docstring): the spot's velocity C_m (v_m + w_m x r) of every sample in the
+    window, with the newest sample's lever arm r (the master's part of the reference: the LDV's
+    relative velocity is not the spot's), fitted by a quadratic in time."""
+
+    def __init__(self, window_s: float) -> None:
+        if not window_s > 0.0:
+            raise ValueError(f'window_s must be > 0, got {window_s}')
+        self._window_ns = int(round(window_s * 1e9))
+        self._samples: deque[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = deque()   # t, C_m, v_b, w_b
+        self._r = np.zeros(3)
+        self._value: np.ndarray | None = None
+
+    def clear(self) -> None:
+        """Forget the samples (a gap): no value until the window refills."""
+        self._samples.clear()
+        self._value = None
+
+    def add(self, t_ns: int, c_m: np.ndarray, v_b: np.ndarray, w_b: np.ndarray, r: np.ndarray) -> None:
+        """One master sample valid at t_ns (increasing times; an older or equal one is ignored):
+        attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m."""
+        if self._samples and t_ns <= self._samples[-1][0]:
+            return
+        self._samples.append((t_ns, c_m, v_b, w_b))
+        self._r = np.asarray(r, dtype=float)
+        while t_ns - self._samples[0][0] > self._window_ns:
+            self._samples.popleft()
+        self._value = None
+
+    def acceleration(self) -> np.ndarray | None:
+        """d v / dt (3,) at the newest sample, or None while the samples span less than MIN_FILL
+        of the window (or are fewer than four)."""
+        if self._value is not None:
+            return self._value
+        s = self._samples
+        if len(s) < 4 or s[-1][0] - s[0][0] < MIN_FILL * self._window_ns:
+            return None
+        t_end, r = s[-1][0], self._r
+        tau = np.array([(t - t_end) * 1e-9 for t, _, _, _ in s])
+        v = np.array([c @ (vb + np.cross(wb, r)) for _, c, vb, wb in s])
+        a = np.column_stack([np.ones_like(tau), tau, tau * tau])
+        coef, *_ = np.linalg.lstsq(a, v, rcond=None)
+        self._value = coef[1]
+        return self._value
+
+
+def reference_specific_force(f_slave_n: np.ndarray, a_spot_n: np.ndarray, v_n: np.ndarray,
+                             w_ie: np.ndarray, w_en: np.ndarray) -> np.ndarray:
+    """(3,) the specific force for the error model: the slave's vertical, the horizontal (E, N)
+    from the spot's acceleration plus the Coriolis and transport terms (ENU: gravity is vertical)."""
+    f = np.array(f_slave_n, dtype=float)
+    f[0:2] = (a_spot_n + np.cross(2.0 * w_ie + w_en, v_n))[0:2]
+    return f

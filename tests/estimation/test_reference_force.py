@@ -1,0 +1,124 @@
+"""The error model's specific force from the reference (filter.specific_force: reference,
+estimation/reference_force.py).
+
+The covariance of a Kalman filter on a linear model does not depend on the data: linearised
+about the true trajectory, the velocity-matching model's F holds the true specific force, the
+true attitude only in the bias couplings (isotropic biases: invariant under a constant rotation
+of the body axes) and H the beam's direction, all independent of how far off the slave starts.
+So the heading sigma after a parked alignment must not depend on the aircraft's mounting error.
+With the slave's own specific force in F it does: its horizontal part carries g x the slave's
+tilt error, a quantity the filter treats as known while its own roll sigma is tens of arcmin on
+a beam along x, and the heading is credited with information it does not have (docs/carrier.md).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.estimation.reference_force import SpotAcceleration, reference_specific_force
+from alignment_core.units import ARCMIN
+from alignment_core.validation import ConfigError
+
+# carrier_deck's ship, beam LDV and filter, without the pieces that are not at issue here
+PLAIN = {'duration_s': 30.0, 'aircraft.gear.enabled': False, 'aircraft.flexure.enabled': False,
+         'filter.lever_arm_states': False, 'aircraft.lever_arm_survey_sigma_m': 0.0,
+         'master.model': 'constant', 'master.rate_hz': 100.0, 'master.latency_s': 0.0,
+         'master.latency_jitter_s': 0.0, 'filter.master_delay_state': False}
+
+
+def _heading_sigma(force: str, roll_mounting_arcmin: float) -> float:
+    sc = scenario.load('carrier_deck', {**PLAIN, 'filter.specific_force': force,
+                                        'aircraft.misalignment_arcmin': [roll_mounting_arcmin, 0.0, 0.0]}, seed=2)
+    return float(pipeline.run(sc, keep_truth=False).estimates[-1].misalignment_sigma[2] / ARCMIN)
+
+
+def test_heading_sigma_does_not_depend_on_the_mounting_error_with_the_reference_force():
+    # +-45' of roll: the slave's f^n differs by g x 90' = 0.26 m/s^2 across the beam, 3-6x the
+    # carrier's horizontal acceleration; the linearised model's covariance is the same for both
+    up, down = _heading_sigma('reference', 45.0), _heading_sigma('reference', -45.0)
+    assert abs(up - down) < 0.02 * up
+    # the slave's own specific force: the sigma follows the realised tilt error (the defect)
+    up, down = _heading_sigma('slave', 45.0), _heading_sigma('slave', -45.0)
+    assert abs(up - down) > 0.05 * max(up, down)
+
+
+def test_spot_acceleration_is_exact_for_a_quadratic_velocity():
+    # v(t) = v0 + a t + j t^2 / 2: dv/dt at the newest sample t_end is a + j t_end, exactly
+    acc = SpotAcceleration(1.0)
+    v0, a, j = np.array([10.0, -3.0, 0.2]), np.array([0.05, -0.02, 0.3]), np.array([0.01, 0.04, -0.02])
+    t_end = 0.0
+    for k in range(40):                      # 0.78 s at 50 Hz: below 0.8 of the window, no value
+        t_end = 0.02 * k
+        acc.add(int(round(t_end * 1e9)), np.eye(3), v0 + a * t_end + 0.5 * j * t_end ** 2, np.zeros(3), np.zeros(3))
+    assert acc.acceleration() is None
+    for k in range(40, 120):
+        t_end = 0.02 * k
+        acc.add(int(round(t_end * 1e9)), np.eye(3), v0 + a * t_end + 0.5 * j * t_end ** 2, np.zeros(3), np.zeros(3))
+    np.testing.assert_allclose(acc.acceleration(), a + j * t_end, atol=1e-9)
+    acc.clear()
+    assert acc.acceleration() is None
+
+
+def test_reference_specific_force_is_the_spot_acceleration_plus_coriolis_horizontally():
+    # ENU at 45 deg N, 10 m/s north: (2 w_ie) x v has an east part -2 w_ie sin(lat) v_N... (closed form)
+    w_e = 7.292115e-5
+    lat = np.radians(45.0)
+    w_ie = np.array([0.0, w_e * np.cos(lat), w_e * np.sin(lat)])
+    v = np.array([0.0, 10.0, 0.0])
+    f = reference_specific_force(np.array([0.3, -0.2, 9.8]), np.array([0.01, 0.02, 0.5]), v, w_ie, np.zeros(3))
+    # (2 w_ie x v)_E = 2 (w_N v_U - w_U v_N) = -2 w_e sin(lat) 10; _N = 2 (w_U v_E - w_E v_U) = 0
+    np.testing.assert_allclose(f, [0.01 - 2 * w_e * np.sin(lat) * 10.0, 0.02, 9.8], atol=1e-12)
+
+
+def test_reference_force_options_are_validated():
+    with pytest.raises(ConfigError, match='specific_force'):
+        scenario.load('carrier_deck', {'filter.specific_force': 'master'})
+    with pytest.raises(ConfigError, match='reference_force_window_s'):
+        scenario.load('carrier_deck', {'filter.reference_force_window_s': 0.0})
+    with pytest.raises(ConfigError, match='specific_force reference'):
+        scenario.load('seed001', {'filter.specific_force': 'reference'})
+
+
+def test_spot_acceleration_takes_the_lever_arm_of_the_newest_sample():
+    # a ship turning at a constant rate w about up, at rest otherwise: the spot at r moves on a circle,
+    # v = C(t) (w x r) and a = C(t) (w x (w x r)), the centripetal -w^2 r_h (closed form)
+    w = 0.05
+    r = np.array([40.0, -10.0, 15.0])
+    acc = SpotAcceleration(1.0)
+    t_end = 0.0
+    for k in range(51):
+        t_end = 0.02 * k
+        c, s = np.cos(w * t_end), np.sin(w * t_end)
+        c_m = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        # an older, wrong lever arm before the last sample: the fit uses the newest one only
+        acc.add(int(round(t_end * 1e9)), c_m, np.zeros(3), np.array([0.0, 0.0, w]), r if k == 50 else 2.0 * r)
+    expected = c_m @ np.cross([0.0, 0.0, w], np.cross([0.0, 0.0, w], r))
+    # the quadratic fit's truncation: a cubic c t^3 over [-T, 0] fits with the end slope -0.6 c T^2
+    # (its least-squares projection), so 0.1 |v'''| T^2 = 0.1 w^4 |r_h| T^2 = 2.6e-5 m/s^2 at T = 1 s
+    err = np.linalg.norm(acc.acceleration() - expected)
+    assert err < 0.1 * w ** 4 * np.linalg.norm(r[:2]) * 1.1
+
+
+def _vector_ldv_delay(acceleration: str) -> tuple[float, float]:
+    """carrier_deck with a vector LDV, the aircraft on its gear (the LDV flags it creeping, so the
+    delay's column is taken as moving), 30 ms of master latency not told: the delay estimate and
+    its sigma (s) after 30 s."""
+    sc = scenario.load('carrier_deck', {'duration_s': 30.0, 'ldv.mode': 'vector', 'master.latency_jitter_s': 0.0,
+                                        'filter.specific_force': 'slave', 'filter.delay_acceleration': acceleration},
+                       seed=2)
+    al = pipeline.align(sc, pipeline.simulate(sc))
+    k = al.state_labels.index('master_delay_s')
+    e = al.outputs[-1]
+    return float(e.state[k]), float(e.sigma[k])
+
+
+def test_the_delay_column_from_the_master_fit_finds_the_latency():
+    # the true delay is the master's 30 ms (no jitter); the column from two master samples 20 ms apart
+    # carries their 1 mm/s velocity noise as 0.07 m/s^2, as large as the deck's acceleration, and the
+    # estimate is pulled toward zero (errors in the regressor)
+    dt, sig = _vector_ldv_delay('reference')
+    assert abs(dt - 0.030) < 3.0 * sig and sig < 0.005
+    dt, sig = _vector_ldv_delay('slave')
+    assert 0.030 - dt > 5.0 * sig
