@@ -59,6 +59,7 @@ from rclpy.utilities import remove_ros_args
 
 from alignment_ros.bag import BagError, BagWriter, stamp_reader
 from alignment_ros.bag_qos import adapted_qos, endpoints_hash, qos_dict
+from alignment_ros.heap import release_free_heap
 from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.record_options import TopicFilter, parse_args
@@ -70,6 +71,7 @@ NS = 1_000_000_000
 SPIN_TIMEOUT_S = 0.05
 FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed recorder keeps)
 PUBLISHERS_INTERVAL_S = 1.0  # the recorded topics' publishers are looked up this often
+TRIM_INTERVAL_S = 30.0  # freed heap (the reorder buffer's peaks) handed back to the OS this often
 WALL_STAMPED = ('/rosout', '/parameter_events')   # rcl stamps these with the wall clock
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # rmw's name of a node not yet discovered
 
@@ -266,7 +268,7 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str
     discovering = not args.no_discovery and (args.filter.discovers() or rec.pending_topics())
     next_poll = time.monotonic() + interval
     next_flush = time.monotonic() + FLUSH_INTERVAL_S
-    next_publishers = time.monotonic()
+    next_publishers = next_trim = time.monotonic()
     end_seen: float | None = None
     expected: dict[str, int] | None = None
     while True:
@@ -282,6 +284,9 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str
             rec.note_publishers()
             next_publishers = now + PUBLISHERS_INTERVAL_S
             _progress(rec, progress, args.progress_lines)
+        if now >= next_trim:
+            release_free_heap()
+            next_trim = now + TRIM_INTERVAL_S
         if discovering and now >= next_poll:
             rec.discover()
             discovering = args.filter.discovers() or bool(rec.pending_topics())
