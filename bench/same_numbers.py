@@ -1,5 +1,6 @@
 """Check that a change leaves the batch pipeline's numbers as they were: run a few seeds of the
-`deck` and `catapult` scenarios, save every estimate's arrays, or compare them with a saved file.
+`deck`, `catapult` and `carrier_catapult` (schuler model, master delay state) scenarios, save
+every estimate's arrays, or compare them with a saved file.
 
     python bench/same_numbers.py save REF.npz [--seconds S]
     python bench/same_numbers.py compare REF.npz [--seconds S]
@@ -17,7 +18,7 @@ import numpy as np
 from alignment_core import pipeline
 from alignment_core.config import scenario
 
-CASES = [('deck', 1), ('deck', 7), ('catapult', 1), ('catapult', 3)]
+CASES = [('deck', 1), ('deck', 7), ('catapult', 1), ('catapult', 3), ('carrier_catapult', 1)]
 SKIP = {'report', 'flags', 'fading'}
 
 
@@ -58,10 +59,14 @@ def main() -> None:
             continue
         worst = {k: float(np.nanmax(np.abs(d[k] - ref[f'{c}/{k}']), initial=0.0))
                  if d[k].shape == ref[f'{c}/{k}'].shape else np.inf for k in d}
-        same = all(np.array_equal(d[k], ref[f'{c}/{k}'], equal_nan=True) for k in d)
+        same = all(d[k].shape == ref[f'{c}/{k}'].shape and np.array_equal(d[k].view(np.int64),
+                                                                          ref[f'{c}/{k}'].view(np.int64))
+                   for k in d)                    # bit patterns: a -0.0 for a 0.0 counts as a change
         ok &= same
+        field = max(worst, key=lambda k: worst[k])
         print(f'{c}: {"bitwise equal" if same else "DIFFERENT"}; max |diff| misalignment '
-              f'{worst["misalignment"]:.3e} rad, any field {max(worst.values()):.3e} ({max(worst, key=worst.get)})')
+              f'{worst["misalignment"]:.3e} rad, any field {worst[field]:.3e}'
+              + (f' ({field})' if worst[field] else ''))
     raise SystemExit(0 if ok else 1)
 
 

@@ -42,6 +42,7 @@ from alignment_core.estimation.models.base import (
     relative_misalignment,
 )
 from alignment_core.geometry.rotations import (
+    floats,
     quat_to_dcm,
     rotate_attitude,
     rotvec_to_dcm,
@@ -64,14 +65,26 @@ def labels(master_states: bool) -> tuple[str, ...]:
     return LABELS + MASTER_LABELS if master_states else LABELS
 
 
+def _h_index(n: int) -> np.ndarray:
+    """Flat indices of H's non-zero cells in a (3, n) array: the velocity identity, then -[u x]
+    at (0, 12) in skew_cells' order."""
+    return np.array([3, n + 4, 2 * n + 5] + [r * n + c for r, c in skew_cells(0, 12)])
+
+
+_H_INDEX: dict[int, np.ndarray] = {}
+
+
 def measurement(u_n: np.ndarray, n: int = N) -> np.ndarray:
     """H (3, n); for n = 15 the master-attitude block is -[u x] with u the rotated lever-arm
-    plus LDV velocity (nav frame)."""
+    plus LDV velocity (nav frame). Written with one put(): the cells of skew_values(-u)."""
     if n == N:
         return H
+    idx = _H_INDEX.get(n)
+    if idx is None:
+        idx = _H_INDEX[n] = _h_index(n)
+    x, y, z = floats(u_n)
     h = np.zeros((3, n))
-    h[0, 3] = h[1, 4] = h[2, 5] = 1.0
-    skew_into(h, 0, 12, -u_n)
+    h.put(idx, [1.0, 1.0, 1.0] + skew_values(-x, -y, -z))
     return h
 
 
