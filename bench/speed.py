@@ -210,8 +210,8 @@ def main() -> None:
     today = eng['today']['median_us']
     print(f'whole engine step (today) vs filterpy\'s bare predict + update: {today / kf["filterpy_us"]:.2f}x its time')
     if peer:
-        print(f'pyins run_feedback_filter: {peer["pyins_us"]:.1f} us per step ({peer["pyins_steps"]} velocity updates) '
-              f'-> engine step {today / peer["pyins_us"]:.2f}x pyins\' time (< 1: faster)')
+        print(f'pyins run_feedback_filter: {peer["pyins_us"]:.0f} us per step ({peer["pyins_steps"]} velocity updates) '
+              f'-> the engine step is {peer["pyins_us"] / today:.0f}x faster')
     else:
         print('pyins: not installed (scripts/bench.sh installs requirements-bench.txt)')
     print(f'Monte Carlo, 300 s deck, {a.runs} runs per setting:')
