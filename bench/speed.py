@@ -13,13 +13,16 @@ step the three samples are pushed and process() runs; median over the steps afte
 tenth, best of --repeat. Filter: our KalmanFilter (Joseph form) and filterpy's on the same
 n = 15, m = 3 workload with the engine's measurement matrix H = [0 I 0 0 -[u x]], median per
 predict + update, best of --repeat, interleaved. pyins: bench/monte_carlo.py's peer workload.
-Ratios are only meaningful within a run (a shared machine's load moves every absolute number).
+Ratios are only meaningful within a run (a shared machine's load moves every absolute number);
+the Monte Carlo's CPU seconds per run (this process and its pool's workers) move less with the
+load than its wall time.
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -138,10 +141,13 @@ def mc_rpm(runs: int, workers: int) -> dict:
     from alignment_experiments import monte_carlo
     specs = [monte_carlo.RunSpec(index=i, cell='bench', scenario='deck', overrides=(), seed=100 + i,
                                  score_at=250.0) for i in range(runs)]
-    t = time.perf_counter()
+    def cpu() -> float:          # this process and its reaped children (the pool's workers, once shut down)
+        own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+        return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+    c, t = cpu(), time.perf_counter()
     monte_carlo.run_many(specs, workers=workers, progress=False)
     wall = time.perf_counter() - t
-    return {'wall_s': wall, 'runs_per_min': 60.0 * runs / wall}
+    return {'wall_s': wall, 'runs_per_min': 60.0 * runs / wall, 'cpu_s_per_run': (cpu() - c) / runs}
 
 
 def child(part: str, a: argparse.Namespace) -> None:
@@ -217,12 +223,15 @@ def main() -> None:
     print(f'Monte Carlo, 300 s deck, {a.runs} runs per setting:')
     for (name, w), r in mc.items():
         print(f'  {name:12s} workers={w}: {r["wall_s"]:7.1f} s  {r["runs_per_min"]:6.1f} runs/min  '
-              f'-> 100 runs in {100 / r["runs_per_min"]:5.1f} min')
+              f'-> 100 runs in {100 / r["runs_per_min"]:5.1f} min; {r["cpu_s_per_run"]:5.1f} CPU s per run')
     if a.against:
         e0 = eng[a.against]['median_us']
         print(f'today vs {a.against}: engine step {e0 / today:.2f}x faster; Monte Carlo '
               + ', '.join(f'{w} worker(s) {mc[("today", w)]["runs_per_min"] / mc[(a.against, w)]["runs_per_min"]:.2f}x'
-                          for w in (1, 2)))
+                          for w in (1, 2))
+              + ' (wall); CPU per run ' + ', '.join(
+                  f'{w} worker(s) {mc[(a.against, w)]["cpu_s_per_run"] / mc[("today", w)]["cpu_s_per_run"]:.2f}x'
+                  for w in (1, 2)) + ' less')
 
 
 if __name__ == '__main__':
