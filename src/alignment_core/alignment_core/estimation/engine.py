@@ -337,11 +337,14 @@ class TransferAlignment(ImuEvents, EngineViews):
     def _emit(self, t: int, live: LiveSolution) -> None:
         """One output at master stamp t, valid at t less the master latency; after a breakdown,
         the last good one with healthy=False."""
-        if self._health.running and not self._maker.keep(live, self._results):
-            self._fail('covariance not finite at the output')
+        odo = None
+        if self._health.running:
+            odo = self._maker.keep(live, self._results)
+            if odo is None:
+                self._fail('covariance not finite at the output')
         level, flags = status.with_lag(*status.level_and_flags(self._health, self._monitor), t - live.t_ns,
                                        self._bridge_ns, int(self._cfg.gap_error_s * 1e9))
         e = self._maker.make(t, live, self._results, self._counters.updates, self._matching, level, flags,
-                             t_valid=t - self._master_lat_ns)
+                             t_valid=t - self._master_lat_ns, odometry=odo)
         e.report = self.report(level, flags)
         self._outputs.append(e)

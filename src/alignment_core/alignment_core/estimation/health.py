@@ -39,6 +39,6 @@ def check_health(x: np.ndarray, p: np.ndarray) -> None:
     """Raise NumericalBreakdownError unless x is finite and P has a finite, positive diagonal
     (a Cholesky of every P would cost more than the update; a negative or non-finite
     variance is how single-precision breakdowns show first)."""
-    d = np.diagonal(p)
+    d = p.diagonal()                # the method: np.diagonal's wrapper costs more than the check
     if not (finite(x, d) and float(_min(d)) > 0.0):
         raise NumericalBreakdownError('covariance not positive definite or not finite')

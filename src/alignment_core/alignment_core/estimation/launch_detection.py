@@ -4,19 +4,21 @@ engine consults it once per LDV sample, feeds it the IMU's specific force along 
 launch, and applies what it decides (docs/engine.md, launch detection)."""
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from alignment_core.samples import LdvSample
 
 
-@dataclass(frozen=True)
-class LdvDecision:
+class LdvDecision(NamedTuple):
     """What the engine does with one LDV sample. `record`: the samples to record now, in stamp
     order (empty: the sample is held back and no match may run); `launch_ns`: the validity time
-    of a launch confirmed by this sample, if any; `creep`: creep was first seen at this sample."""
+    of a launch confirmed by this sample, if any; `creep`: creep was first seen at this sample.
+    (A NamedTuple: one is made per LDV sample, at a third of a frozen dataclass's cost.)"""
     record: tuple[LdvSample, ...] = ()
     launch_ns: int | None = None
     creep: bool = False
@@ -110,7 +112,7 @@ class LaunchDetector:
     def observe(self, s: LdvSample) -> LdvDecision:
         """The decision for the next LDV sample (stamp order)."""
         lim = self.limits
-        speed = float(np.sqrt(s.v_s @ s.v_s)) if s.valid else 0.0
+        speed = math.sqrt(float(s.v_s @ s.v_s)) if s.valid else 0.0
         fast = speed > lim.launch_mps
         if s.valid:
             rl = self._recent
@@ -174,7 +176,7 @@ class LaunchDetector:
         if lim.creep_mps <= 0.0 or len(self._recent) < w:
             return False
         mean = self._recent_sum / w
-        if float(np.sqrt(mean @ mean)) <= 0.5 * lim.creep_mps:
+        if math.sqrt(float(mean @ mean)) <= 0.5 * lim.creep_mps:
             return False
         return self._median_speed() > lim.creep_mps
 

@@ -21,7 +21,7 @@ from alignment_core.estimation.models.base import RateInputs
 from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.outputs import Counters
 from alignment_core.estimation.reference_force import SpotAcceleration
-from alignment_core.geometry.rotations import cross3, quat_conj, quat_mul, quat_to_dcm
+from alignment_core.geometry.rotations import cross3, floats, quat_mul_f, quat_to_dcm
 from alignment_core.navigation.history import LdvRecord, SlaveHistory
 from alignment_core.navigation.strapdown import NavState, Strapdown
 from alignment_core.samples import DopplerSample, MasterSample
@@ -320,12 +320,13 @@ class Matcher:
             self._lowpass.shift(st.v_n - v0)
         history = live.history
         if history.items or nav is not st:
-            q_corr = quat_mul(st.q_nb, quat_conj(q0))
+            cx, cy, cz, cw = floats(q0)
+            q_corr = quat_mul_f(floats(st.q_nb), (-cx, -cy, -cz, cw))     # floats: quat_mul(q, quat_conj(q0))
             dv = st.v_n - v0
             dpos = (st.lat - pos0[0], st.lon - pos0[1], st.h - pos0[2])
             history.correct(q_corr, dv, *dpos)
             if nav is not st:
-                q = quat_mul(q_corr, nav.q_nb)
+                q = np.array(quat_mul_f(q_corr, floats(nav.q_nb)))
                 nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + dv, lat=nav.lat + dpos[0],
                                lon=nav.lon + dpos[1], h=nav.h + dpos[2])
         return x_new, nav

@@ -93,29 +93,34 @@ class EstimateMaker:
         self.held_state: np.ndarray | None = None      # the accumulated estimate at the last keep
         self.held: tuple[np.ndarray, np.ndarray, dict, np.ndarray, np.ndarray] | None = None
 
-    def keep(self, live: LiveSolution, res: MatchResults) -> bool:
-        """Keep the live covariance for the next output (and as the held one); False if it or the
-        published misalignment is not finite (a breakdown)."""
+    def keep(self, live: LiveSolution, res: MatchResults) -> Odometry | None:
+        """Keep the live covariance for the next output (and as the held one) and return the live
+        odometry (for `make` at the same instant); None if the covariance or the published
+        misalignment is not finite (a breakdown)."""
         att, p = self._model.attitude, live.kf.P
         cov, sigma = p[att, att].copy(), np.sqrt(np.diag(p))
         if not (finite(cov, sigma) and finite(res.mu, res.mu_sigma)):
-            return False
+            return None
         odo = self._odometry.make(live.ins.s, p, live.gyro, res.corr.bg)
         self.held = (cov, sigma, live.kf.diagnostics(), odo.pose_cov, odo.twist_cov)
         self.held_state = self.state.values(live.kf.x, res.corr)
-        return True
+        return odo
 
     def make(self, t: int, live: LiveSolution, res: MatchResults, updates: int, matching: bool,
-             level: int, flags: tuple[str, ...], t_valid: int | None = None) -> Estimate:
+             level: int, flags: tuple[str, ...], t_valid: int | None = None,
+             odometry: Odometry | None = None) -> Estimate:
         """The output at master stamp t, valid at t_valid (default t), with what `keep` kept
-        last (the prior before any)."""
+        last (the prior before any); `odometry`: what `keep` just returned for this same live
+        state (saves computing it twice), else computed here."""
         st = live.ins.s
         if self.held is None:
             att, p0 = self._model.attitude, self._model.initial_covariance()
             odo0 = self._odometry.make(st, p0, live.gyro, res.corr.bg)
             self.held = (p0[att, att].copy(), np.sqrt(np.diag(p0)), {}, odo0.pose_cov, odo0.twist_cov)
         cov, sigma, diag, pose_cov, twist_cov = self.held
-        p_w, v_b, w_b = self._odometry.make(st, live.kf.P, live.gyro, res.corr.bg)[:3]
+        if odometry is None:
+            odometry = self._odometry.make(st, live.kf.P, live.gyro, res.corr.bg)
+        p_w, v_b, w_b = odometry[:3]
         corr = res.corr
         return Estimate(
             t_ns=t, misalignment=res.mu.copy(), misalignment_sigma=res.mu_sigma.copy(),

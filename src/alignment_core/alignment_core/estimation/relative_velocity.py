@@ -53,12 +53,12 @@ class RelativeVelocity:
         came at all."""
         if self.mode != LDV or quiet_since_ns is None:
             return False
-        others = [last.get('imu'), last.get('master')]
-        if any(t is None for t in others):
+        t_imu, t_master = last.get('imu'), last.get('master')
+        if t_imu is None or t_master is None:
             return False
         ref = last.get('ldv')
         ended = final and ref is None and self.option == 'auto'
-        if not ended and min(t for t in others if t is not None) - quiet_since_ns <= self._silence_ns:
+        if not ended and min(t_imu, t_master) - quiet_since_ns <= self._silence_ns:
             return False
         if ref is None and self.option == 'auto':
             self.mode = ABSENT

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from alignment_core.geometry.rotations import floats, normalized_f, quat_mul_f, slerp
+from alignment_core.geometry.rotations import Floats, floats, normalized_f, quat_mul_f, slerp
 from alignment_core.navigation.strapdown import NavState
 
 _EYES: dict[int, np.ndarray] = {}
@@ -114,7 +114,7 @@ class SlaveHistory:
             phi_acc = p if phi_acc is None else p @ phi_acc
         return nav, phi_acc
 
-    def correct(self, q_corr: np.ndarray, dv: np.ndarray, dlat: float, dlon: float, dh: float) -> None:
+    def correct(self, q_corr: Floats, dv: np.ndarray, dlat: float, dlon: float, dh: float) -> None:
         """Apply a feedback correction (nav-frame rotation q_corr, velocity and position
         changes) to every stored solution."""
         qc = floats(q_corr)

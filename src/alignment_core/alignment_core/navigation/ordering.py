@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
-from typing import Any
+from typing import Any, cast
 
 Event = tuple[str, int, Any]
 
@@ -44,7 +44,9 @@ class StampMerger:
 
     def watermark(self) -> int | None:
         """The least recent stamp of all streams (None until every stream has delivered)."""
-        return None if self._silent else min(t for t in self.last.values() if t is not None)
+        if self._silent:
+            return None
+        return min(cast('dict[str, int]', self.last).values())     # none is None once all delivered
 
     def pop_ready(self) -> list[Event]:
         """(stream, stamp, item) of every queued event up to the watermark, in order."""

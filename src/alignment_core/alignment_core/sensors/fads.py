@@ -32,7 +32,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 from scipy.spatial.transform import Rotation
 
 from alignment_core.air_data.atmosphere import P0, Atmosphere, DayOffsets, pressure_altitude
@@ -243,6 +242,9 @@ class FadsStage:
             x[0], start = n[0], 1                    # stationary start
             self._gm = x[0]
         if m > start:
+            # imported here: scipy.signal (and the scipy.stats it pulls in) would add seconds to the
+            # start-up of every node that imports this module, most of which never make a frame
+            from scipy.signal import lfilter
             c = np.sqrt(1.0 - self.rho**2)
             x[start:], _ = lfilter([c], [1.0, -self.rho], n[start:], axis=0, zi=(self.rho * self._gm)[None])
         self._gm = x[-1].copy()

@@ -24,7 +24,6 @@ velocity error that was already fed back.
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import butter, lfilter, lfilter_zi
 
 
 class ButterworthLowPass:
@@ -36,6 +35,8 @@ class ButterworthLowPass:
             raise ValueError(f'cut-off {cutoff_hz} Hz must be in (0, {0.5 * rate_hz}) Hz (Nyquist)')
         self.cutoff_hz = float(cutoff_hz)
         self.rate_hz = float(rate_hz)
+        # imported here: scipy.signal would add ~1 s to the start-up of every node that imports the engine
+        from scipy.signal import butter, lfilter_zi
         b, a = butter(order, wn)
         self.b, self.a = b / a[0], a / a[0]
         self.zi_unit = lfilter_zi(self.b, self.a)          # (order,) steady state for unit input
@@ -62,6 +63,7 @@ class ButterworthLowPass:
 
     def batch(self, xs: np.ndarray) -> np.ndarray:
         """The same filter over a whole record (K, channels) by scipy.signal.lfilter (reference)."""
+        from scipy.signal import lfilter
         xs = np.asarray(xs, dtype=float)
         y, _ = lfilter(self.b, self.a, xs, axis=0, zi=np.outer(self.zi_unit, xs[0]))
         return y

@@ -177,7 +177,7 @@ def relative_misalignment(c_m: np.ndarray, c_na: np.ndarray, p_rel: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
     """mu = log(C_m^T C_a) (aircraft axes) and its 1-sigma from the nav-frame covariance p_rel
     of the relative attitude error, rotated to aircraft axes."""
-    return dcm_to_rotvec(c_m.T @ c_na), np.sqrt(np.diag(c_na.T @ p_rel @ c_na))
+    return dcm_to_rotvec(c_m.T @ c_na), np.sqrt((c_na.T @ p_rel @ c_na).diagonal())
 
 
 class ModelWrapper(ErrorModel):

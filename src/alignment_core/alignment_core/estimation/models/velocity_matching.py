@@ -42,6 +42,7 @@ from alignment_core.estimation.models.base import (
     relative_misalignment,
 )
 from alignment_core.geometry.rotations import (
+    floats,
     quat_to_dcm,
     rotate_attitude,
     rotvec_to_dcm,
@@ -64,14 +65,26 @@ def labels(master_states: bool) -> tuple[str, ...]:
     return LABELS + MASTER_LABELS if master_states else LABELS
 
 
+def _h_index(n: int) -> np.ndarray:
+    """Flat indices of H's non-zero cells in a (3, n) array: the velocity identity, then -[u x]
+    at (0, 12) in skew_cells' order."""
+    return np.array([3, n + 4, 2 * n + 5] + [r * n + c for r, c in skew_cells(0, 12)])
+
+
+_H_INDEX: dict[int, np.ndarray] = {}
+
+
 def measurement(u_n: np.ndarray, n: int = N) -> np.ndarray:
     """H (3, n); for n = 15 the master-attitude block is -[u x] with u the rotated lever-arm
-    plus LDV velocity (nav frame)."""
+    plus LDV velocity (nav frame). Written with one put(): the cells of skew_values(-u)."""
     if n == N:
         return H
+    idx = _H_INDEX.get(n)
+    if idx is None:
+        idx = _H_INDEX[n] = _h_index(n)
+    x, y, z = floats(u_n)
     h = np.zeros((3, n))
-    h[0, 3] = h[1, 4] = h[2, 5] = 1.0
-    skew_into(h, 0, 12, -u_n)
+    h.put(idx, [1.0, 1.0, 1.0] + skew_values(-x, -y, -z))
     return h
 
 
@@ -109,16 +122,21 @@ def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.nda
     idx = _FH_INDEX.get(n)
     if idx is None:
         idx = _FH_INDEX[n] = _fh_index(n)
-    c = c_nb.ravel().tolist()
+    c0, c1, c2, c3, c4, c5, c6, c7, c8 = c_nb.ravel().tolist()
     fx, fy, fz = f_n.tolist()
-    ie = w_ie.tolist()
-    en = w_en.tolist()
+    ie0, ie1, ie2 = w_ie.tolist()
+    en0, en1, en2 = w_en.tolist()
     mh = -h
-    vals = (skew_values(mh * (ie[0] + en[0]), mh * (ie[1] + en[1]), mh * (ie[2] + en[2]))
-            + [mh * e for e in c]
-            + skew_values(h * fx, h * fy, h * fz)
-            + skew_values(mh * (2.0 * ie[0] + en[0]), mh * (2.0 * ie[1] + en[1]), mh * (2.0 * ie[2] + en[2]))
-            + [h * e for e in c])
+    # skew_values(x, y, z) = (-z, y, z, -x, -y, x) written out (the calls and list joins cost more
+    # than the arithmetic)
+    ax, ay, az = mh * (ie0 + en0), mh * (ie1 + en1), mh * (ie2 + en2)
+    bx, by, bz = h * fx, h * fy, h * fz
+    dx, dy, dz = mh * (2.0 * ie0 + en0), mh * (2.0 * ie1 + en1), mh * (2.0 * ie2 + en2)
+    vals = (-az, ay, az, -ax, -ay, ax,
+            mh * c0, mh * c1, mh * c2, mh * c3, mh * c4, mh * c5, mh * c6, mh * c7, mh * c8,
+            -bz, by, bz, -bx, -by, bx,
+            -dz, dy, dz, -dx, -dy, dx,
+            h * c0, h * c1, h * c2, h * c3, h * c4, h * c5, h * c6, h * c7, h * c8)
     fh = np.zeros((n, n))
     fh.put(idx, vals)
     half = _dot(fh, fh)

@@ -1,0 +1,238 @@
+"""Issue 17's numbers in one run: the engine's time per IMU step (15-state vm15, a 100 Hz master
+match at every step) against filterpy's KalmanFilter predict + update at n = 15, m = 3 and against
+pyins; Monte Carlo runs per minute of the 300 s `deck` scenario at 1 and 2 workers; and, with
+--against REV, the same engine and Monte Carlo numbers of the code at git revision REV (its
+src/ extracted to a temporary directory), measured alternately with today's in the same run so
+both see the same machine load.
+
+    scripts/bench.sh speed [--runs 4] [--seconds 60] [--repeat 3] [--against REV]
+
+Every measurement runs in a child process (`--child PART`, PYTHONPATH pointing at the tree
+measured). Engine: TransferAlignment on a simulated `deck` run (--seconds at 100 Hz); per IMU
+step the three samples are pushed and process() runs; median over the steps after the first
+tenth, best of --repeat. Filter: our KalmanFilter (Joseph form) and filterpy's on the same
+n = 15, m = 3 workload with the engine's measurement matrix H = [0 I 0 0 -[u x]], median per
+predict + update, best of --repeat, interleaved. pyins: bench/monte_carlo.py's peer workload.
+Ratios are only meaningful within a run (a shared machine's load moves every absolute number);
+the Monte Carlo's CPU seconds per run (this process and its pool's workers) move less with the
+load than its wall time.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ('alignment_core', 'alignment_experiments')
+
+
+# ----- the measurements (child side) -----
+
+def engine_us(seconds: float, repeat: int) -> dict:
+    """Median / p95 us per IMU step with its LDV + master match, vm15 on the deck scenario."""
+    from alignment_core import pipeline
+    from alignment_core.config import scenario
+    from alignment_core.estimation.engine import TransferAlignment
+    sc = scenario.load('deck', {'duration_s': seconds})
+    inp = pipeline.simulate(sc)
+    best = None
+    for _ in range(repeat):
+        f = TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
+        ts = np.empty(len(inp.imu))
+        clock = time.perf_counter_ns
+        j_l = j_m = 0
+        for k, imu in enumerate(inp.imu):
+            t = imu.t_ns
+            t0 = clock()
+            f.push_imu(imu)
+            while j_l < len(inp.ldv) and inp.ldv[j_l].t_ns <= t:
+                f.push_ldv(inp.ldv[j_l])
+                j_l += 1
+            while j_m < len(inp.master) and inp.master[j_m].t_ns <= t:
+                f.push_master(inp.master[j_m])
+                j_m += 1
+            f.process()
+            ts[k] = clock() - t0
+        ts = ts[len(ts) // 10:] * 1e-3
+        if best is None or np.median(ts) < np.median(best):
+            best = ts
+    assert best is not None
+    return {'median_us': float(np.median(best)), 'p95_us': float(np.quantile(best, 0.95)),
+            'updates': f.counters.updates, 'steps': len(inp.imu)}
+
+
+def kf_workload(steps: int, n: int = 15, m: int = 3, seed: int = 0):
+    """Phi (dense, stable), Qd, the engine's vm15 H = [0 I 0 0 -[u x]], R, P0 and measurements."""
+    import scipy.linalg as sla
+    rng = np.random.default_rng(seed)
+    k = rng.standard_normal((n, n))
+    phi = sla.expm(0.01 * (k - k.T) - 1e-4 * np.eye(n))
+    qd = np.diag(rng.uniform(0.5, 2.0, n)) * 1e-6
+    h = np.zeros((m, n))
+    h[:, 3:6] = np.eye(3)
+    ux, uy, uz = 0.3, -0.2, 0.1                     # a lever-arm velocity, m/s: -[u x] on phi_m
+    h[:, 12:15] = -np.array([[0.0, -uz, uy], [uz, 0.0, -ux], [-uy, ux, 0.0]])
+    r = np.diag(rng.uniform(0.5, 2.0, m)) * 1e-4
+    x = rng.standard_normal(n) * 0.1
+    zs = np.empty((steps, m))
+    for i in range(steps):
+        x = phi @ x + np.sqrt(np.diag(qd)) * rng.standard_normal(n)
+        zs[i] = h @ x + np.sqrt(np.diag(r)) * rng.standard_normal(m)
+    return phi, qd, h, r, np.eye(n) * 1e-2, zs
+
+
+def kf_us(steps: int, repeat: int) -> dict:
+    """Median us per predict + update: ours (Joseph form) and filterpy's, best of repeat, interleaved."""
+    from filterpy.kalman import KalmanFilter as FpKF
+
+    from alignment_core.estimation.filters import KalmanFilter
+    phi, qd, h, r, p0, zs = kf_workload(steps)
+    n, m = h.shape[1], h.shape[0]
+    clock = time.perf_counter_ns
+
+    def ours() -> float:
+        f = KalmanFilter(np.zeros(n), p0)
+        ts = np.empty(len(zs))
+        for i, z in enumerate(zs):
+            t0 = clock()
+            f.predict(phi, qd)
+            f.update(z, h, r)
+            ts[i] = clock() - t0
+        return float(np.median(ts)) * 1e-3
+
+    def theirs() -> float:
+        f = FpKF(dim_x=n, dim_z=m)
+        f.F, f.Q, f.H, f.R, f.P = phi, qd, h, r, p0.copy()
+        ts = np.empty(len(zs))
+        for i, z in enumerate(zs):
+            t0 = clock()
+            f.predict()
+            f.update(z)
+            ts[i] = clock() - t0
+        return float(np.median(ts)) * 1e-3
+    a, b = [], []
+    for _ in range(repeat):
+        a.append(ours())
+        b.append(theirs())
+    return {'ours_us': min(a), 'filterpy_us': min(b)}
+
+
+def pyins_us(seconds: float) -> dict:
+    sys.path.insert(0, str(ROOT / 'bench'))
+    from monte_carlo import pyins_filter_seconds
+    got = pyins_filter_seconds(seconds, 100.0, 0.01)
+    if got is None:
+        return {}
+    t, n = got
+    return {'pyins_us': 1e6 * t / n, 'pyins_steps': n}
+
+
+def mc_rpm(runs: int, workers: int) -> dict:
+    """Runs per minute of the 300 s deck scenario (scored as bench/monte_carlo.py does)."""
+    from alignment_experiments import monte_carlo
+    specs = [monte_carlo.RunSpec(index=i, cell='bench', scenario='deck', overrides=(), seed=100 + i,
+                                 score_at=250.0) for i in range(runs)]
+    def cpu() -> float:          # this process and its reaped children (the pool's workers, once shut down)
+        own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+        return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+    c, t = cpu(), time.perf_counter()
+    monte_carlo.run_many(specs, workers=workers, progress=False)
+    wall = time.perf_counter() - t
+    return {'wall_s': wall, 'runs_per_min': 60.0 * runs / wall, 'cpu_s_per_run': (cpu() - c) / runs}
+
+
+def child(part: str, a: argparse.Namespace) -> None:
+    if part == 'engine':
+        out = engine_us(a.seconds, a.repeat)
+    elif part == 'kf':
+        out = kf_us(a.kf_steps, a.repeat)
+    elif part == 'pyins':
+        out = pyins_us(a.peer_seconds)
+    elif part.startswith('mc'):
+        out = mc_rpm(a.runs, int(part[2:]))
+    else:
+        raise SystemExit(f'unknown part {part}')
+    print(json.dumps(out))
+
+
+# ----- the driver -----
+
+def extract(rev: str, into: Path) -> str:
+    """src/<package> of git revision rev under `into`; the PYTHONPATH entries to import it."""
+    tar = subprocess.run(['git', '-C', str(ROOT), 'archive', rev, *(f'src/{p}' for p in PACKAGES)],
+                         check=True, capture_output=True).stdout
+    subprocess.run(['tar', '-x', '-C', str(into)], input=tar, check=True)
+    return os.pathsep.join(str(into / 'src' / p) for p in PACKAGES)
+
+
+def run(part: str, a: argparse.Namespace, pythonpath: str | None) -> dict:
+    env = dict(os.environ)
+    if pythonpath:
+        env['PYTHONPATH'] = pythonpath + os.pathsep + env.get('PYTHONPATH', '')
+    args = [sys.executable, __file__, '--child', part, '--runs', str(a.runs), '--seconds', str(a.seconds),
+            '--repeat', str(a.repeat), '--kf-steps', str(a.kf_steps), '--peer-seconds', str(a.peer_seconds)]
+    p = subprocess.run(args, env=env, capture_output=True, text=True, cwd=ROOT)
+    if p.returncode != 0:
+        raise RuntimeError(f'{part}: {p.stderr[-2000:]}')
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument('--runs', type=int, default=4, help='Monte Carlo runs per worker setting')
+    ap.add_argument('--seconds', type=float, default=60.0, help='simulated seconds of the engine run')
+    ap.add_argument('--repeat', type=int, default=3)
+    ap.add_argument('--kf-steps', type=int, default=3000)
+    ap.add_argument('--peer-seconds', type=float, default=20.0, help='simulated seconds of the pyins run')
+    ap.add_argument('--against', metavar='REV', help='also measure git revision REV (e.g. main) in the same run')
+    ap.add_argument('--child', help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.child:
+        child(a.child, a)
+        return
+    with tempfile.TemporaryDirectory() as d:
+        trees: dict[str, str | None] = {'today': None}
+        if a.against:
+            trees = {a.against: extract(a.against, Path(d)), 'today': None}
+        print(f'{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} at the start; trees: {", ".join(trees)}')
+        eng = {name: run('engine', a, pp) for name, pp in trees.items()}
+        kf = run('kf', a, None)
+        peer = run('pyins', a, None)
+        mc = {(name, w): run(f'mc{w}', a, pp) for w in (1, 2) for name, pp in trees.items()}
+    print(f'\nengine per IMU step + 100 Hz master match (vm15, deck, {a.seconds:g} s, best of {a.repeat}):')
+    for name, e in eng.items():
+        print(f'  {name:12s} median {e["median_us"]:7.1f} us  p95 {e["p95_us"]:7.1f} us  ({e["updates"]} updates)')
+    print(f'bare filter predict + update, n=15 m=3 (engine H), best of {a.repeat}: ours {kf["ours_us"]:.1f} us, '
+          f'filterpy {kf["filterpy_us"]:.1f} us -> {kf["filterpy_us"] / kf["ours_us"]:.2f}x filterpy\'s speed')
+    today = eng['today']['median_us']
+    print(f'whole engine step (today) vs filterpy\'s bare predict + update: {today / kf["filterpy_us"]:.2f}x its time')
+    if peer:
+        print(f'pyins run_feedback_filter: {peer["pyins_us"]:.0f} us per step ({peer["pyins_steps"]} velocity updates) '
+              f'-> the engine step is {peer["pyins_us"] / today:.0f}x faster')
+    else:
+        print('pyins: not installed (scripts/bench.sh installs requirements-bench.txt)')
+    print(f'Monte Carlo, 300 s deck, {a.runs} runs per setting:')
+    for (name, w), r in mc.items():
+        print(f'  {name:12s} workers={w}: {r["wall_s"]:7.1f} s  {r["runs_per_min"]:6.1f} runs/min  '
+              f'-> 100 runs in {100 / r["runs_per_min"]:5.1f} min; {r["cpu_s_per_run"]:5.1f} CPU s per run')
+    if a.against:
+        e0 = eng[a.against]['median_us']
+        print(f'today vs {a.against}: engine step {e0 / today:.2f}x faster; Monte Carlo '
+              + ', '.join(f'{w} worker(s) {mc[("today", w)]["runs_per_min"] / mc[(a.against, w)]["runs_per_min"]:.2f}x'
+                          for w in (1, 2))
+              + ' (wall); CPU per run ' + ', '.join(
+                  f'{w} worker(s) {mc[(a.against, w)]["cpu_s_per_run"] / mc[("today", w)]["cpu_s_per_run"]:.2f}x'
+                  for w in (1, 2)) + ' less')
+
+
+if __name__ == '__main__':
+    main()
