@@ -1,5 +1,5 @@
 """A node's engine keeps no history (memory flat over a run): without it, process() returns the
-same estimates, and outputs / published hold only the latest."""
+same estimates, outputs / published hold only the latest and the whiteness test no window."""
 from __future__ import annotations
 
 import numpy as np
@@ -39,3 +39,5 @@ def test_no_history_same_estimates():
         assert x.t_ns == y.t_ns
         np.testing.assert_array_equal(x.misalignment, y.misalignment)
     assert lean.latest.t_ns == full.latest.t_ns
+    assert len(full.whiteness.history) == full.whiteness.completed >= 1
+    assert lean.whiteness.history == [] and lean.whiteness.last == full.whiteness.last

@@ -82,3 +82,14 @@ def test_whiteness_sees_a_latency_the_nis_monitor_cannot():
     f = _run(0.001, known=False)
     assert f.counters.consistency_failures == 0
     assert f.whiteness.failures >= 2
+
+
+def test_without_history_the_windows_are_counted_but_not_kept():
+    """A node's engine (keep_history False) keeps no window: its memory does not grow with the run."""
+    rng = np.random.default_rng(3)
+    kept, bounded = InnovationWhiteness(20, 2, 0.01), InnovationWhiteness(20, 2, 0.01, keep_history=False)
+    for n in rng.standard_normal((60, 3)):
+        kept.add(n, np.eye(3))
+        bounded.add(n, np.eye(3))
+    assert kept.completed == bounded.completed == 3 and len(kept.history) == 3
+    assert bounded.history == [] and bounded.last == kept.last

@@ -47,8 +47,9 @@ class TransferAlignment(ImuEvents, EngineViews):
 
     def __init__(self, cfg: FilterConfig, plane: earth.TangentPlane, imu_rate_hz: float,
                  keep_history: bool = True) -> None:
-        """keep_history False (a node): `outputs` and `published` keep only the latest estimate,
-        so memory does not grow with the run (process() returns the new ones either way)."""
+        """keep_history False (a node): `outputs` and `published` keep only the latest estimate
+        and `whiteness.history` nothing, so memory does not grow with the run (process() returns
+        the new ones either way)."""
         self._keep_history = keep_history
         self._cfg = cfg
         self._plane = plane
@@ -102,7 +103,8 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._health = status.Health()
         self._monitor = NisMonitor(cfg.consistency_window_updates, cfg.consistency_warn_p,
                                    cfg.consistency_error_windows, cfg.gate_chi2 if cfg.gate_chi2 > 0.0 else None)
-        self._whiteness = InnovationWhiteness(cfg.whiteness_window_updates, cfg.whiteness_lags, cfg.whiteness_p)
+        self._whiteness = InnovationWhiteness(cfg.whiteness_window_updates, cfg.whiteness_lags, cfg.whiteness_p,
+                                              keep_history)
         self._maker = EstimateMaker(self._model, OdometryMaker(self._model, plane, self._imu_dt_nominal,
                                                                cfg.arw_dpsh, cfg.gyro_bias_sigma_dph))
         self._guard = PublishGuard(cfg.misalignment_max_deg * DEG)

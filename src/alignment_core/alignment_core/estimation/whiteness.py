@@ -50,7 +50,8 @@ def ljung_box(e: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarray]:
 class InnovationWhiteness:
     """The windowed Ljung-Box test over blocks of `window` accepted updates."""
 
-    def __init__(self, window: int, lags: int, p_fail: float) -> None:
+    def __init__(self, window: int, lags: int, p_fail: float, keep_history: bool = True) -> None:
+        """keep_history False (a node): `history` stays empty, so memory does not grow with the run."""
         if window < 10 or not 1 <= lags < window // 2 or not 0.0 < p_fail < 1.0:
             raise ValueError(f'bad whiteness settings: window {window}, lags {lags}, p {p_fail}')
         self.window, self.lags, self.p_fail = window, lags, p_fail
@@ -59,6 +60,7 @@ class InnovationWhiteness:
         self.failures = 0
         self.last: WhitenessResult | None = None
         self.history: list[tuple[WhitenessResult, int]] = []    # (result, updates seen) per window
+        self._keep_history = keep_history
         self._seen = 0
 
     def add(self, innovation: np.ndarray, s: np.ndarray) -> WhitenessResult | None:
@@ -85,7 +87,8 @@ class InnovationWhiteness:
         self.last = res
         self.completed += 1
         self.failures += res.failed
-        self.history.append((res, self._seen))
+        if self._keep_history:
+            self.history.append((res, self._seen))
         return res
 
     def restart(self) -> None:
