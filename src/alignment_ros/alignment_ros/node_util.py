@@ -21,9 +21,14 @@ from rclpy.node import Node
 from alignment_core.validation import ConfigError
 
 from . import params, qos
+from .heap import release_free_heap
 from .signals import stop_on_signals
 
 RCLError = rclpy_implementation.RCLError
+
+TRIM_INTERVAL_S = 30.0
+"""How often a spinning node hands freed heap back to the OS (alignment_ros/heap.py): the
+allocator otherwise keeps each new high-water mark of its input queues in the resident set."""
 
 ACK_TIMEOUT_S = 30.0
 """At shutdown: how long a node waits for its subscribers to acknowledge every message. A
@@ -207,8 +212,12 @@ def run(node_factory, spin: bool = True) -> None:
     node.executor_ref = executor
     try:
         if spin:
+            next_trim = time.monotonic() + TRIM_INTERVAL_S
             while rclpy.ok() and not stop['signal']:
                 executor.spin_once(timeout_sec=0.1)
+                if time.monotonic() >= next_trim:
+                    release_free_heap()
+                    next_trim = time.monotonic() + TRIM_INTERVAL_S
         else:
             node.run(lambda: stop['signal'])
     finally:
