@@ -41,30 +41,10 @@ def engine_us(seconds: float, repeat: int) -> dict:
     """Median / p95 us per IMU step with its LDV + master match, vm15 on the deck scenario."""
     from alignment_core import pipeline
     from alignment_core.config import scenario
-    from alignment_core.estimation.engine import TransferAlignment
     sc = scenario.load('deck', {'duration_s': seconds})
     inp = pipeline.simulate(sc)
-    best = None
-    for _ in range(repeat):
-        f = TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
-        ts = np.empty(len(inp.imu))
-        clock = time.perf_counter_ns
-        j_l = j_m = 0
-        for k, imu in enumerate(inp.imu):
-            t = imu.t_ns
-            t0 = clock()
-            f.push_imu(imu)
-            while j_l < len(inp.ldv) and inp.ldv[j_l].t_ns <= t:
-                f.push_ldv(inp.ldv[j_l])
-                j_l += 1
-            while j_m < len(inp.master) and inp.master[j_m].t_ns <= t:
-                f.push_master(inp.master[j_m])
-                j_m += 1
-            f.process()
-            ts[k] = clock() - t0
-        ts = ts[len(ts) // 10:] * 1e-3
-        if best is None or np.median(ts) < np.median(best):
-            best = ts
+    from filter_bank import engine_step_times
+    best, f = engine_step_times(sc, inp, repeat)
     assert best is not None
     return {'median_us': float(np.median(best)), 'p95_us': float(np.quantile(best, 0.95)),
             'updates': f.counters.updates, 'steps': len(inp.imu)}

@@ -35,17 +35,21 @@ def state() -> bytes:
 
 @pytest.fixture(scope='module')
 def bag(tmp_path_factory) -> Path:
-    path = tmp_path_factory.mktemp('s') / 'bag'
+    return write_bag(tmp_path_factory.mktemp('s') / 'bag', [TRUTH] * 11, [[x + 1e-3 for x in TRUTH]] * 21)
+
+
+def write_bag(path: Path, truths: list, estimates: list) -> Path:
+    """Truth and estimates (with a state) at 10 Hz from 1.0 s."""
     with BagWriter(path) as w:
         w.add_topic('/truth/misalignment', 'geometry_msgs/msg/Vector3Stamped')
         w.add_topic('/alignment/misalignment', 'geometry_msgs/msg/Vector3Stamped')
         w.add_topic('/alignment/state', 'std_msgs/msg/Float64MultiArray')
-        for k in range(11):
+        for k, v in enumerate(truths):
             t = NS + k * NS // 10
-            w.write('/truth/misalignment', vec(t, TRUTH), t)
-        for k in range(21):
+            w.write('/truth/misalignment', vec(t, v), t)
+        for k, v in enumerate(estimates):
             t = NS + k * NS // 10
-            w.write('/alignment/misalignment', vec(t, [x + 1e-3 for x in TRUTH]), t)
+            w.write('/alignment/misalignment', vec(t, v), t)
             w.write('/alignment/state', state(), t)
     return path
 
@@ -128,19 +132,8 @@ def test_a_moving_truth_is_scored_at_the_estimates_time_of_validity(tmp_path):
     master latency L told to the filter is the relative attitude at t - L. Truth here: a ramp of
     1 mrad per 0.1 s; every estimate equals the truth 0.2 s before its stamp, so with L = 0.2 s
     the error is zero and without it -2 mrad on each axis."""
-    path = tmp_path / 'bag'
-    ramp = [(1e-2 * k, -1e-2 * k, 2e-2 * k) for k in range(21)]
-    with BagWriter(path) as w:
-        w.add_topic('/truth/misalignment', 'geometry_msgs/msg/Vector3Stamped')
-        w.add_topic('/alignment/misalignment', 'geometry_msgs/msg/Vector3Stamped')
-        w.add_topic('/alignment/state', 'std_msgs/msg/Float64MultiArray')
-        for k in range(11):
-            t = NS + k * NS // 10
-            w.write('/truth/misalignment', vec(t, [x / 10 for x in ramp[k]]), t)
-        for k in range(11):
-            t = NS + k * NS // 10
-            w.write('/alignment/misalignment', vec(t, [x / 10 for x in ramp[max(k - 2, 0)]]), t)
-            w.write('/alignment/state', state(), t)
+    ramp = [(1e-3 * k, -1e-3 * k, 2e-3 * k) for k in range(11)]
+    path = write_bag(tmp_path / 'bag', ramp, [ramp[max(k - 2, 0)] for k in range(11)])
     told = summary.summarise(path, path, 1.0, 1.0, 1.0, latency_s=0.2)
     assert told['misalignment_error_rad'] == pytest.approx([0.0, 0.0, 0.0], abs=1e-12)
     untold = summary.summarise(path, path, 1.0, 1.0, 1.0)
