@@ -202,7 +202,7 @@ def engine_run(seconds: float, repeat: int) -> None:
           f'bare KF step (n=21, m=6): {kf_us:.1f} us')
     print(f'{"case":36s}{"median us":>11}{"p95 us":>9}{"mean us":>9}{"ratio":>7}{"updates":>9}')
     for name, ov in ENGINE_CASES.items():
-        sc = scenario.load('deck', {'duration_s': seconds, **ov})
+        sc = scenario.load('deck_paper', {'duration_s': seconds, **ov})
         inp = pipeline.simulate(sc)
         best, f = engine_step_times(sc, inp, repeat)
         print(f'{name:36s}{np.median(best):11.1f}{np.quantile(best, 0.95):9.1f}{best.mean():9.1f}'

@@ -43,7 +43,7 @@ def graph(rtf: float) -> dict:
 
 
 def batch(repeat: int) -> dict:
-    sc = scenario.load('catapult')
+    sc = scenario.load('catapult_paper')
     sim, filt = [], []
     for _ in range(repeat):
         t0 = time.perf_counter()

@@ -65,7 +65,7 @@ def pyins_filter_seconds(duration_s: float, rate_hz: float, time_step: float) ->
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument('--runs', type=int, default=8)
-    ap.add_argument('--scenario', default='deck')
+    ap.add_argument('--scenario', default='deck_paper')
     ap.add_argument('--peer-seconds', type=float, default=20.0,
                     help='simulated seconds of the pyins run (it is slow; per-step times are compared)')
     a = ap.parse_args()

@@ -133,7 +133,7 @@ def main() -> int:
     ap.add_argument('--samples', type=int, default=30000, help='samples per leg (two legs)')
     ap.add_argument('--trace', action='store_true', help='tracemalloc sites (slow)')
     a = ap.parse_args()
-    given = core_scenario.given_data('deck', core_scenario.parse_overrides(['duration_s=7200']), None)
+    given = core_scenario.given_data('deck_paper', core_scenario.parse_overrides(['duration_s=7200']), None)
     sc = core_scenario.resolve(given)
     params = Path(tempfile.mkdtemp(prefix='node-memory-')) / 'params.yaml'
     graph.write_params(given, sc, params)
@@ -144,7 +144,7 @@ def main() -> int:
     if a.node == 'filter':          # the batch streams of just the samples fed (plus a margin)
         duration_s = (WARMUP + 2 * a.samples + 10) / sc.rate_hz
         sim = core_scenario.resolve(core_scenario.given_data(
-            'deck', core_scenario.parse_overrides([f'duration_s={duration_s}']), None))
+            'deck_paper', core_scenario.parse_overrides([f'duration_s={duration_s}']), None))
         steps = filter_steps(node, sim)
     else:
         steps = ship_steps(a.node, node, sc)

@@ -1,5 +1,5 @@
 """Check that a change leaves the batch pipeline's numbers as they were: run a few seeds of the
-`deck`, `catapult` and `carrier_catapult` (schuler model, master delay state) scenarios, save
+`deck`, `catapult` and `catapult` (schuler model, master delay state) scenarios, save
 every estimate's arrays, or compare them with a saved file.
 
     python bench/same_numbers.py save REF.npz [--seconds S]
@@ -18,7 +18,7 @@ import numpy as np
 from alignment_core import pipeline
 from alignment_core.config import scenario
 
-CASES = [('deck', 1), ('deck', 7), ('catapult', 1), ('catapult', 3), ('carrier_catapult', 1)]
+CASES = [('deck_paper', 1), ('deck_paper', 7), ('catapult_paper', 1), ('catapult_paper', 3), ('catapult', 1)]
 SKIP = {'report', 'flags', 'fading'}
 
 

@@ -69,7 +69,7 @@ def main() -> None:
     if a.mmg:
         ov.update({'ship.course_keeping': 'mmg', 'ship.turn_at_s': 60.0,
                    'ship.turn_to_deg': 120.0, 'ship.wind_speed_kn': 25.0, 'ship.wind_from_deg': 70.0})
-    sc = scenario.load('deck', ov)
+    sc = scenario.load('deck_paper', ov)
     t_build, src = best(lambda: pipeline.ship_source(sc), a.repeat)
     tau = np.arange(sc.n_samples) * sc.dt_ns / 1e9
     print(f'sea state {a.sea_state}: Hs {src.sea.hs_m} m, Tp {src.sea.tp_s} s; {len(src.comps)} '
@@ -92,7 +92,7 @@ def main() -> None:
     if a.ins:
         from test_ship_ins import NOISE_OFF, strapdown_errors
         for arm in ([90.0, -40.0, 15.0], [0.0, 0.0, 0.0]):
-            sci = scenario.load('deck', {**ov, **NOISE_OFF, 'aircraft.lever_arm_m': arm})
+            sci = scenario.load('deck_paper', {**ov, **NOISE_OFF, 'aircraft.lever_arm_m': arm})
             t = time.perf_counter()
             att, vel, _ = strapdown_errors(sci)
             n = len(att)

@@ -86,7 +86,7 @@ def main() -> int:
     ap.add_argument('--progress', action='store_true', help='print each sample (JSON) as it is taken')
     a = ap.parse_args()
     out = a.keep or Path(tempfile.mkdtemp(prefix='soak-')) / 'run'
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck', '--out', str(out),
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck_paper', '--out', str(out),
            '--real-time-factor', str(a.rtf), '--set', f'duration_s={a.duration_s}']
     for s in a.sets:
         cmd += ['--set', s]

@@ -41,7 +41,7 @@ def engine_us(seconds: float, repeat: int) -> dict:
     """Median / p95 us per IMU step with its LDV + master match, vm15 on the deck scenario."""
     from alignment_core import pipeline
     from alignment_core.config import scenario
-    sc = scenario.load('deck', {'duration_s': seconds})
+    sc = scenario.load('deck_paper', {'duration_s': seconds})
     inp = pipeline.simulate(sc)
     from filter_bank import engine_step_times
     best, f = engine_step_times(sc, inp, repeat)
@@ -119,7 +119,7 @@ def pyins_us(seconds: float) -> dict:
 def mc_rpm(runs: int, workers: int) -> dict:
     """Runs per minute of the 300 s deck scenario (scored as bench/monte_carlo.py does)."""
     from alignment_experiments import monte_carlo
-    specs = [monte_carlo.RunSpec(index=i, cell='bench', scenario='deck', overrides=(), seed=100 + i,
+    specs = [monte_carlo.RunSpec(index=i, cell='bench', scenario='deck_paper', overrides=(), seed=100 + i,
                                  score_at=250.0) for i in range(runs)]
     def cpu() -> float:          # this process and its reaped children (the pool's workers, once shut down)
         own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)

@@ -83,7 +83,7 @@ def main() -> int:
     ap.add_argument('--runs', type=int, default=20)
     ap.add_argument('--load', type=int, default=0, help='extra CPU-bound processes during the runs')
     ap.add_argument('--rtf', type=float, default=0.0, help='real_time_factor (0: as fast as possible)')
-    ap.add_argument('--scenario', default='catapult')
+    ap.add_argument('--scenario', default='catapult_paper')
     ap.add_argument('--set', dest='sets', action='append', default=None, metavar='KEY=VALUE',
                     help=f'scenario overrides (default: {" ".join(DEFAULT_SETS)})')
     ap.add_argument('--timeout', type=float, default=900.0, help='wall seconds per run')

@@ -26,7 +26,7 @@ def score(res: pipeline.BatchResult) -> tuple[np.ndarray, np.ndarray]:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument('--scenario', default='catapult')
+    ap.add_argument('--scenario', default='catapult_paper')
     ap.add_argument('--seeds', type=int, default=20)
     ap.add_argument('--first-seed', type=int, default=1)
     ap.add_argument('--set', dest='sets', action='append', default=[])

@@ -69,6 +69,8 @@ SRC_SHA="$( { find src -name package.xml -o -name setup.py -o -name setup.cfg | 
 BUILD_STAMP="$ROOT/ros2_ws/install/.build.sha"
 if [ "$SRC_SHA" != "$(cat "$BUILD_STAMP" 2>/dev/null || true)" ]; then
   echo "setup.sh: colcon build"
+  # a config file removed since the last build leaves a dangling link that setuptools cannot copy
+  [ -d "$ROOT/ros2_ws/build" ] && find "$ROOT/ros2_ws/build" "$ROOT/ros2_ws/install" -xtype l -delete 2>/dev/null || true
   ( cd "$ROOT/ros2_ws" && "$VENV/bin/colcon" build --symlink-install \
       --event-handlers console_cohesion- status- summary- >/dev/null ) || {
     echo "setup.sh: colcon build failed; see ros2_ws/log/latest_build" >&2; exit 1; }

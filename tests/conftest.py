@@ -15,7 +15,7 @@ for _var in ('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS'):
     os.environ.setdefault(_var, '1')
 
 ROOT = Path(__file__).resolve().parents[1]
-PARAMS = ROOT / 'config/params/graph.yaml'
+PARAMS = ROOT / 'config/params/catapult_paper.yaml'
 # the DDS profile scripts/env.sh exports (loopback only; writers wait for slow readers), also for the
 # test process's own participants when pytest runs without env.sh
 os.environ.setdefault('FASTRTPS_DEFAULT_PROFILES_FILE', str(ROOT / 'config/dds/fastdds.xml'))

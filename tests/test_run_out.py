@@ -21,7 +21,7 @@ CASES = {
 
 
 def _scenario(sets: list[str]) -> scenario.Scenario:
-    given = scenario.given_data('deck', scenario.parse_overrides(['duration_s=3.0', 'seed=3', *sets]), None)
+    given = scenario.given_data('deck_paper', scenario.parse_overrides(['duration_s=3.0', 'seed=3', *sets]), None)
     return scenario.resolve(given)
 
 
@@ -34,7 +34,7 @@ def _graph_stamps(sc: scenario.Scenario, extra: int) -> tuple[np.ndarray, np.nda
 
 
 def test_default_scenarios_need_no_run_out():
-    assert run_out.run_out_samples(scenario.resolve(scenario.given_data('catapult', {}, None))) == 0
+    assert run_out.run_out_samples(scenario.resolve(scenario.given_data('catapult_paper', {}, None))) == 0
     assert run_out.run_out_samples(_scenario(['master.rate_hz=50.0'])) == 0
 
 

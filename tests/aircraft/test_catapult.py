@@ -46,7 +46,7 @@ PROFILES = {
 
 
 def run(overrides):
-    sc = scenario.load('catapult', {**SHORT, **overrides})
+    sc = scenario.load('catapult_paper', {**SHORT, **overrides})
     ship_list = pipeline.ship_samples(sc)
     truth, imu = pipeline.SlaveImuStage(sc).run_batch(ShipBatch.of(ship_list))
     tau = (np.array([s.t_ns for s in ship_list]) - sc.t0_ns) / 1e9
@@ -166,4 +166,4 @@ def test_ins_consistency_through_holdback_and_profiled_stroke(ov):
 ])
 def test_invalid_catapult_settings_fail_clearly(ov, msg):
     with pytest.raises(ConfigError, match=msg):
-        scenario.load('catapult', {**SHORT, **ov})
+        scenario.load('catapult_paper', {**SHORT, **ov})

@@ -63,7 +63,7 @@ def test_van_loan_matches_stationary_lyapunov():
 
 
 def test_increments_consistent_with_flexed_truth_300s():
-    sc = scenario.load('deck', {**NOISE_OFF, **FLEX, 'ship.sea_state': 5, 'duration_s': 300.0,
+    sc = scenario.load('deck_paper', {**NOISE_OFF, **FLEX, 'ship.sea_state': 5, 'duration_s': 300.0,
                                 'aircraft.lever_arm_m': [60.0, -15.0, 20.0]})
     ships = ShipBatch.of(pipeline.ship_samples(sc))
     stage = pipeline.SlaveImuStage(sc)
@@ -81,7 +81,7 @@ def test_increments_consistent_with_flexed_truth_300s():
 
 
 def test_catapult_with_flexure_and_vibration():
-    sc = scenario.load('catapult', {**NOISE_OFF, **FLEX, 'duration_s': 4.0,
+    sc = scenario.load('catapult_paper', {**NOISE_OFF, **FLEX, 'duration_s': 4.0,
                                     'aircraft.catapult.launch_time_s': 1.0, 'aircraft.catapult.stroke_s': 2.0,
                                     'aircraft.vibration.enabled': True, 'aircraft.vibration.mode': 'motion'})
     ship_list = pipeline.ship_samples(sc)
@@ -99,7 +99,7 @@ def test_truth_misalignment_is_the_mounting_plus_the_flexure():
     """The truth is the IMU's attitude relative to the master's: the mounting turned by the deck's
     flexure (static 3' and dynamic 3' 1-sigma per axis by default): off the mounting by
     arcminutes, within 5 sigma of both."""
-    sc = scenario.load('catapult', {**FLEX, 'duration_s': 1.0})
+    sc = scenario.load('catapult_paper', {**FLEX, 'duration_s': 1.0})
     res = pipeline.run(sc)
     mu = np.asarray(sc.aircraft.misalignment_arcmin) * ARCMIN
     off = np.array([t.misalignment for t in res.truth if t.on_deck]) - mu

@@ -34,7 +34,7 @@ BASE = {**NOISE_OFF, 'aircraft.catapult.launch_time_s': LAUNCH, 'aircraft.catapu
 
 
 def run(segments, duration, **ov):
-    sc = scenario.load('catapult', {**BASE, 'duration_s': duration, 'aircraft.flight.segments': segments,
+    sc = scenario.load('catapult_paper', {**BASE, 'duration_s': duration, 'aircraft.flight.segments': segments,
                                     **{k.replace('__', '.'): v for k, v in ov.items()}})
     ship_list = pipeline.ship_samples(sc)
     truth, imu = pipeline.SlaveImuStage(sc).run_batch(ShipBatch.of(ship_list))
@@ -168,7 +168,7 @@ def test_ins_consistency_through_the_flight(segments, sea, alpha):
 def test_batch_equals_step_in_flight():
     """The node steps the stage sample by sample: the same numbers as the batch (the position
     grid is extended in fixed chunks, so the call pattern does not matter)."""
-    sc = scenario.load('catapult', {**BASE, 'duration_s': 9.0, 'aircraft.flight.segments':
+    sc = scenario.load('catapult_paper', {**BASE, 'duration_s': 9.0, 'aircraft.flight.segments':
                                     'turn duration_s=2 turn_rate_dps=8 transition_s=1.23; level transition_s=0.7'})
     ship_list = pipeline.ship_samples(sc)
     truth_b, imu_b = pipeline.SlaveImuStage(sc).run_batch(ShipBatch.of(ship_list))

@@ -33,7 +33,7 @@ AIRBORNE = {**NOISE_OFF, 'aircraft.catapult.enabled': False, 'aircraft.flight.st
 
 
 def run(segments, duration, **ov):
-    sc = scenario.load('catapult', {**AIRBORNE, 'duration_s': duration, 'aircraft.flight.segments': segments,
+    sc = scenario.load('catapult_paper', {**AIRBORNE, 'duration_s': duration, 'aircraft.flight.segments': segments,
                                     **{k.replace('__', '.'): v for k, v in ov.items()}})
     ship_list = pipeline.ship_samples(sc)
     stage = pipeline.SlaveImuStage(sc)
@@ -92,7 +92,7 @@ def test_body_rate_is_the_derivative_of_the_attitude(sweep):
 
 def test_commanded_angles_after_a_catapult_release():
     """Deck start: once the 2 s settle is over the air angles are the commanded ones."""
-    sc = scenario.load('catapult', {**NOISE_OFF, 'duration_s': 14.0, 'aircraft.catapult.launch_time_s': 2.0,
+    sc = scenario.load('catapult_paper', {**NOISE_OFF, 'duration_s': 14.0, 'aircraft.catapult.launch_time_s': 2.0,
                                     'aircraft.flight.segments': 'level duration_s=4 alpha_deg=6 beta_deg=-4; level'})
     truth, _ = pipeline.SlaveImuStage(sc).run_batch(ShipBatch.of(pipeline.ship_samples(sc)))
     tau = np.arange(len(truth['v_b'])) / sc.rate_hz
@@ -108,7 +108,7 @@ def test_airborne_start_state():
     sc, path, truth, imu, tau = run('level', 5.0, aircraft__flight__start_height_m=1000.0,
                                     aircraft__flight__start_speed_mps=33.6, aircraft__flight__start_track_deg=90.0,
                                     aircraft__flight__alpha_deg=2.0)
-    deck = scenario.load('catapult', {**NOISE_OFF, 'duration_s': 1.0})
+    deck = scenario.load('catapult_paper', {**NOISE_OFF, 'duration_s': 1.0})
     truth_deck, _ = pipeline.SlaveImuStage(deck).run_batch(ShipBatch.of(pipeline.ship_samples(deck)))
     assert set(truth) == set(truth_deck)
     assert not truth['on_deck'].any() and len(imu) == len(tau) - 1
@@ -182,7 +182,7 @@ def test_hypersonic_position_follows_the_ellipsoid(hyper):
 
 
 def test_batch_equals_step_airborne():
-    sc = scenario.load('catapult', {**AIRBORNE, 'duration_s': 4.0, 'aircraft.flight.segments':
+    sc = scenario.load('catapult_paper', {**AIRBORNE, 'duration_s': 4.0, 'aircraft.flight.segments':
                                     'level duration_s=2 transition_s=1.23 alpha_deg=20 beta_deg=5; level beta_deg=-5'})
     ship_list = pipeline.ship_samples(sc)
     truth_b, imu_b = pipeline.SlaveImuStage(sc).run_batch(ShipBatch.of(ship_list))
@@ -198,7 +198,7 @@ def test_batch_equals_step_airborne():
 
 
 def test_airborne_keys_reach_the_flight_config():
-    sc = scenario.load('catapult', {'aircraft.flight.start': 'airborne', 'aircraft.catapult.enabled': False,
+    sc = scenario.load('catapult_paper', {'aircraft.flight.start': 'airborne', 'aircraft.catapult.enabled': False,
                                     'aircraft.flight.start_height_m': 1000, 'aircraft.flight.start_speed_mps': 33.6,
                                     'aircraft.flight.start_track_deg': 90})
     f = sc.aircraft.flight
@@ -219,5 +219,5 @@ def test_airborne_keys_reach_the_flight_config():
 ])
 def test_invalid_flight_keys_fail_clearly(overrides, msg):
     with pytest.raises(ConfigError, match=msg) as e:
-        scenario.load('catapult', overrides)
+        scenario.load('catapult_paper', overrides)
     assert 'aircraft' in str(e.value)

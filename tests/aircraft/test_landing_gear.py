@@ -269,7 +269,7 @@ SHORT = {'duration_s': 8.0, 'aircraft.catapult.launch_time_s': 4.0, 'aircraft.ca
 
 
 def _digest(over: dict) -> str:
-    sc = scenario.load('catapult', {**SHORT, **over})
+    sc = scenario.load('catapult_paper', {**SHORT, **over})
     truth, imu = pipeline.SlaveImuStage(sc).run_batch(ShipBatch.of(pipeline.ship_samples(sc)))
     h = hashlib.sha256()
     for a in (truth['p_w'], truth['q_nb'], truth['v_b'], truth['w_b'],
@@ -296,7 +296,7 @@ GEAR = {'aircraft.gear.enabled': True, 'ship.mode': 'spectral', 'ship.sea_state'
 
 @pytest.mark.parametrize('spring', ['linear', 'polytropic'])
 def test_gear_stepping_equals_batch_and_increments_integrate_to_truth(spring):
-    sc = scenario.load('catapult', {**NOISE_OFF, **SHORT, **GEAR, 'aircraft.flexure.enabled': True,
+    sc = scenario.load('catapult_paper', {**NOISE_OFF, **SHORT, **GEAR, 'aircraft.flexure.enabled': True,
                                     'aircraft.gear.strut_spring': spring})
     ships = pipeline.ship_samples(sc)
     stage = pipeline.SlaveImuStage(sc)
@@ -314,8 +314,8 @@ def test_gear_stepping_equals_batch_and_increments_integrate_to_truth(spring):
 
 def test_truth_and_ldv_see_the_gear():
     over = {**SHORT, **GEAR, 'ldv.noise_mps': 1e-9}
-    rigid = pipeline.simulate(scenario.load('catapult', {**over, 'aircraft.gear.enabled': False}))
-    sc = scenario.load('catapult', over)
+    rigid = pipeline.simulate(scenario.load('catapult_paper', {**over, 'aircraft.gear.enabled': False}))
+    sc = scenario.load('catapult_paper', over)
     inp = pipeline.simulate(sc)
     stage = pipeline.SlaveImuStage(sc)
     stage.run_batch(inp.ships)

@@ -12,7 +12,7 @@ from alignment_experiments.monte_carlo import true_misalignment
 
 
 def test_on_a_rigid_deck_the_truth_is_the_mounting():
-    sc = scenario.load('catapult', {'duration_s': 3.0}, seed=3)
+    sc = scenario.load('catapult_paper', {'duration_s': 3.0}, seed=3)
     r = pipeline.run(sc)
     mu = np.array([t.misalignment for t in r.truth if t.on_deck])
     expected = np.array(sc.aircraft.misalignment_arcmin) * ARCMIN          # the scenario's mounting
@@ -21,7 +21,7 @@ def test_on_a_rigid_deck_the_truth_is_the_mounting():
 
 
 def test_on_the_gear_the_truth_moves_and_the_per_sample_path_matches_the_batch():
-    sc = scenario.load('carrier_deck', {'duration_s': 8.0}, seed=1)
+    sc = scenario.load('deck', {'duration_s': 8.0}, seed=1)
     inp = pipeline.simulate(sc)
     batch = true_misalignment(inp)
     stage = pipeline.SlaveImuStage(sc)

@@ -31,7 +31,7 @@ VIB = {'aircraft.vibration.enabled': True, 'aircraft.vibration.peak_mps2': A,
 
 
 def run(overrides):
-    sc = scenario.load('catapult', {**SHORT, **overrides})
+    sc = scenario.load('catapult_paper', {**SHORT, **overrides})
     ships = ShipBatch.of(pipeline.ship_samples(sc))
     truth, imu = pipeline.SlaveImuStage(sc).run_batch(ships)
     tau = (np.array([s.t_ns for s in imu]) - sc.t0_ns) / 1e9
@@ -103,7 +103,7 @@ def test_motion_mode_consistent_with_truth():
 @pytest.mark.parametrize('extra', [{'aircraft.vibration.mode': 'motion'}, {'imu.output': 'sample'}],
                          ids=['motion', 'sample'])
 def test_batch_equals_step_with_vibration(extra):
-    sc = scenario.load('catapult', {**SHORT, **VIB, **extra})
+    sc = scenario.load('catapult_paper', {**SHORT, **VIB, **extra})
     ship_list = pipeline.ship_samples(sc)
     _, imu_b = pipeline.SlaveImuStage(sc).run_batch(ShipBatch.of(ship_list))
     stage = pipeline.SlaveImuStage(sc)

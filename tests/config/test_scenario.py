@@ -9,7 +9,7 @@ from alignment_core.validation import ConfigError
 
 
 def test_catapult_defaults_are_seed_000():
-    sc = scenario.load('catapult')
+    sc = scenario.load('catapult_paper')
     assert sc.aircraft.misalignment_arcmin == (15.0, -10.0, -30.0)
     assert sc.aircraft.catapult.enabled and sc.aircraft.catapult.accel_g == 2.0
     assert sc.aircraft.catapult.stroke_s == 3.0
@@ -21,21 +21,21 @@ def test_catapult_defaults_are_seed_000():
 
 def test_unknown_key_names_dotted_path():
     with pytest.raises(ConfigError, match=r'ship\.sea_stat\b'):
-        scenario.load('catapult', {'ship.sea_stat': 5})
+        scenario.load('catapult_paper', {'ship.sea_stat': 5})
     with pytest.raises(ConfigError, match=r'aircraft\.catapult\.acel_g'):
-        scenario.load('deck', {'aircraft.catapult.acel_g': 2.0})
+        scenario.load('deck_paper', {'aircraft.catapult.acel_g': 2.0})
 
 
 def test_out_of_range_sea_state():
     with pytest.raises(ConfigError, match='sea_state'):
-        scenario.load('catapult', {'ship.sea_state': 12})
+        scenario.load('catapult_paper', {'ship.sea_state': 12})
 
 
 def test_wrong_type_names_key():
     with pytest.raises(ConfigError, match=r'ship\.sea_state'):
-        scenario.load('catapult', {'ship.sea_state': 'four'})
+        scenario.load('catapult_paper', {'ship.sea_state': 'four'})
     with pytest.raises(ConfigError, match=r'aircraft\.lever_arm_m'):
-        scenario.load('catapult', {'aircraft.lever_arm_m': [1.0, 2.0]})
+        scenario.load('catapult_paper', {'aircraft.lever_arm_m': [1.0, 2.0]})
 
 
 def test_parse_overrides_yaml_scalars():
@@ -44,7 +44,7 @@ def test_parse_overrides_yaml_scalars():
     assert ov == {'ship.sea_state': 6, 'aircraft.lever_arm_m': [60.0, -15.0, 20.0],
                   'aircraft.catapult.enabled': False, 'seed': 7}
     assert isinstance(ov['ship.sea_state'], int)
-    sc = scenario.load('catapult', ov)
+    sc = scenario.load('catapult_paper', ov)
     assert sc.ship.sea_state == 6 and sc.seed == 7
     assert sc.aircraft.lever_arm_m == (60.0, -15.0, 20.0)
     # the filter and the LDV follow the deck spot unless told otherwise
@@ -55,12 +55,12 @@ def test_parse_overrides_yaml_scalars():
 
 
 def test_seed_argument_overrides():
-    assert scenario.load('deck', seed=42).seed == 42
+    assert scenario.load('deck_paper', seed=42).seed == 42
 
 
 def test_start_time_zero_rejected():
     with pytest.raises(ConfigError, match='start_time_s'):
-        scenario.load('catapult', {'start_time_s': 0.0})
+        scenario.load('catapult_paper', {'start_time_s': 0.0})
 
 
 def test_unknown_scenario_name():
@@ -74,5 +74,5 @@ def test_catapult_events_off_the_sample_grid_rejected(key, value):
     """The stroke must start and end on a 100 Hz sample (no interval straddles the jump in
     acceleration). Rejected with the key named, before any sample is produced."""
     with pytest.raises(ConfigError, match=r'launch_time_s|launch \+ stroke'):
-        sc = scenario.load('catapult', {key: value})
+        sc = scenario.load('catapult_paper', {key: value})
         pipeline.SlaveImuStage(sc)

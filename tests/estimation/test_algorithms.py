@@ -14,7 +14,7 @@ OV = {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0}
 
 
 def _final(algorithm: str, **extra) -> tuple[np.ndarray, np.ndarray]:
-    sc = scenario.load('catapult', {**OV, 'filter.algorithm': algorithm, **extra})
+    sc = scenario.load('catapult_paper', {**OV, 'filter.algorithm': algorithm, **extra})
     res = pipeline.run(sc)
     t_rel = max(t.t_ns for t in res.truth if t.on_deck)
     e = [e for e in res.estimates if e.t_ns <= t_rel][-1]
@@ -56,4 +56,4 @@ def test_float32_kf_runs_and_stays_close():
 
 def test_unknown_algorithm_is_rejected_with_its_key():
     with pytest.raises(ConfigError, match='algorithm'):
-        scenario.load('catapult', {'filter.algorithm': 'magic'})
+        scenario.load('catapult_paper', {'filter.algorithm': 'magic'})

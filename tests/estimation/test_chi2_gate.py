@@ -24,7 +24,7 @@ def _corrupted(inp):
 def _offsets(gate: float):
     """Clean and corrupted engines, and the corrupted run's misalignment minus the clean run's,
     in units of the clean run's sigma, at each output from the first corrupted sample on."""
-    sc = scenario.load('deck', {**DECK, 'filter.gate_chi2': gate})
+    sc = scenario.load('deck_paper', {**DECK, 'filter.gate_chi2': gate})
     inp = pipeline.simulate(sc)
     clean, bad = pipeline.align(sc, inp), pipeline.align(sc, _corrupted(inp))
     t_bad = inp.master[BAD[0]].t_ns
@@ -63,7 +63,7 @@ def test_without_the_gate_the_corrupted_samples_pull_the_estimate():
 def test_the_default_gate_is_on_and_never_gates_a_clean_run():
     """filter.gate_chi2 = 1e6 by default: a gross-outlier gate (a velocity innovation 1000 sigma
     off); the clean deck run's largest NIS is ~20 (chi2_3 over 1000 updates)."""
-    sc = scenario.load('deck', DECK)
+    sc = scenario.load('deck_paper', DECK)
     assert sc.filter.gate_chi2 == 1e6
     f = pipeline.align(sc, pipeline.simulate(sc))
     assert f.counters.gated == 0 and f.counters.gate_released == 0
@@ -73,7 +73,7 @@ def test_a_gated_run_is_released_after_gate_release_updates():
     """A master velocity 0.5 m/s off for 30 samples (NIS ~1e4 each) with the gate at 25: the
     first 10 are gated, the 11th is taken ungated (the filter would otherwise lock itself out if
     its state, not the data, were wrong), then the gate closes again on the next ones."""
-    sc = scenario.load('deck', {**DECK, 'filter.gate_chi2': 25.0})
+    sc = scenario.load('deck_paper', {**DECK, 'filter.gate_chi2': 25.0})
     inp = pipeline.simulate(sc)
     master = list(inp.master)
     for k in range(500, 530):

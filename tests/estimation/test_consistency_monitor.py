@@ -88,9 +88,9 @@ def test_clean_runs_stay_ok_and_a_wrong_noise_model_is_reported():
     times better than it is (0.1 mm/s instead of 1 mm/s, with the 0.1 mm/s parked allowance), its
     NIS is ~50 times too large: ERROR, and the published view holds the last good estimate."""
     over = {'duration_s': 6.0, 'aircraft.catapult.launch_time_s': 4.0}
-    good = pipeline.run(scenario.load('catapult', over), keep_truth=False).filter
+    good = pipeline.run(scenario.load('catapult_paper', over), keep_truth=False).filter
     assert all(e.level == OK for e in good.outputs) and good.healthy
-    bad = pipeline.run(scenario.load('catapult', {**over, 'filter.master_velocity_sigma_mps': 1e-4}),
+    bad = pipeline.run(scenario.load('catapult_paper', {**over, 'filter.master_velocity_sigma_mps': 1e-4}),
                        keep_truth=False).filter
     assert not bad.healthy and 'inconsistent' in bad.failure
     err = [i for i, e in enumerate(bad.outputs) if e.level == ERROR]

@@ -22,7 +22,7 @@ LIMIT = np.array([2.0, 1.0, 1.0]) * ARCMIN          # roll (x), pitch (y), yaw (
 
 @pytest.fixture(scope='module', params=CATAPULT_SEEDS, ids=lambda s: f'seed{s}')
 def catapult(request):
-    return pipeline.run(scenario.load('catapult', seed=request.param))
+    return pipeline.run(scenario.load('catapult_paper', seed=request.param))
 
 
 def _error(res, est):
@@ -60,10 +60,10 @@ def test_catapult_published_misalignment_after_release(catapult):
 
 
 @pytest.mark.parametrize('name,overrides', [
-    ('deck', {}),
+    ('deck_paper', {}),
     # the same deck alignment with a catapult that never fires within the run
-    ('catapult', {'aircraft.catapult.launch_time_s': 1000.0}),
-], ids=['deck', 'catapult-never-fires'])
+    ('catapult_paper', {'aircraft.catapult.launch_time_s': 1000.0}),
+], ids=['deck_paper', 'catapult-never-fires'])
 @pytest.mark.parametrize('seed', [1, 2], ids=lambda s: f'seed{s}')
 def test_deck_level_axes(name, overrides, seed):
     res = pipeline.run(scenario.load(name, {'duration_s': 120.0, **overrides}, seed=seed))
@@ -86,10 +86,10 @@ def test_pipeline_is_deterministic():
     """Same scenario and seed -> bit-identical estimates (a short catapult run: deck matching,
     stroke and free flight); another seed -> different estimates."""
     ov = {'duration_s': 10.0, 'aircraft.catapult.launch_time_s': 5.0}
-    a = _estimate_arrays(pipeline.run(scenario.load('catapult', ov, seed=3)))
-    b = _estimate_arrays(pipeline.run(scenario.load('catapult', ov, seed=3)))
+    a = _estimate_arrays(pipeline.run(scenario.load('catapult_paper', ov, seed=3)))
+    b = _estimate_arrays(pipeline.run(scenario.load('catapult_paper', ov, seed=3)))
     assert len(a['t_ns']) == 101
     for f in a:
         np.testing.assert_array_equal(a[f], b[f], err_msg=f)
-    c = _estimate_arrays(pipeline.run(scenario.load('catapult', ov, seed=4)))
+    c = _estimate_arrays(pipeline.run(scenario.load('catapult_paper', ov, seed=4)))
     assert not np.array_equal(a['misalignment'], c['misalignment'])

@@ -11,7 +11,7 @@ from support.engine_feed import feed_in_order, random_interleaving
 from alignment_core import pipeline
 from alignment_core.config import scenario
 
-SC = scenario.load('catapult', {'duration_s': 6.0, 'aircraft.catapult.launch_time_s': 3.0})
+SC = scenario.load('catapult_paper', {'duration_s': 6.0, 'aircraft.catapult.launch_time_s': 3.0})
 
 
 @pytest.fixture(scope='module')

@@ -24,7 +24,7 @@ def test_default_is_the_15_state_velocity_matching_kf():
     cfg = FilterConfig()
     assert (cfg.model, cfg.algorithm, cfg.lever_arm_treatment, cfg.lever_arm_states) == ('vm15', 'kf', 'compensation',
                                                                                          False)
-    f = TransferAlignment(scenario.load('catapult').filter, pipeline.plane_of(scenario.load('catapult')), 100.0)
+    f = TransferAlignment(scenario.load('catapult_paper').filter, pipeline.plane_of(scenario.load('catapult_paper')), 100.0)
     assert f.n_states == 15 and f.labels[-3:] == ('phim_E', 'phim_N', 'phim_U') and f.model_name == 'vm15'
 
 
@@ -35,7 +35,7 @@ def test_model_names_are_the_config_choices():
 @pytest.mark.parametrize('model', MODELS)
 def test_every_model_runs_in_the_engine_and_labels_its_state(model):
     algorithm = 'ekf' if model == 'seed000_large_angle' else 'kf'
-    sc = scenario.load('deck', {**SHORT, 'filter.model': model, 'filter.algorithm': algorithm,
+    sc = scenario.load('deck_paper', {**SHORT, 'filter.model': model, 'filter.algorithm': algorithm,
                                 'doppler.enabled': model == 'seed001_13'})
     res = pipeline.run(sc, keep_truth=False)
     n = res.filter.n_states
@@ -66,7 +66,7 @@ def test_every_model_runs_in_the_engine_and_labels_its_state(model):
 ])
 def test_invalid_combinations_are_refused_with_a_message(overrides, message):
     with pytest.raises(ConfigError, match=message) as err:
-        scenario.load('catapult', overrides)
+        scenario.load('catapult_paper', overrides)
     assert 'filter' in str(err.value)
 
 
@@ -94,7 +94,7 @@ def test_seed001_doppler_matching_in_flight_estimates_the_radar_errors(seed):
 
 
 def test_butterworth_cutoff_above_nyquist_is_refused_by_the_engine():
-    sc = scenario.load('catapult', {'filter.lever_arm_treatment': 'butterworth', 'filter.butterworth_cutoff_hz': 60.0})
+    sc = scenario.load('catapult_paper', {'filter.lever_arm_treatment': 'butterworth', 'filter.butterworth_cutoff_hz': 60.0})
     with pytest.raises(ConfigError, match='Nyquist'):
         TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
 
@@ -105,7 +105,7 @@ def test_lever_arm_states_recover_a_surveying_error():
     5 mm/s of matching noise, so 30 s resolve it to centimetres, and the misalignment error
     returns inside 3 sigma; without the states that arm error costs tens of arcminutes."""
     ov = {'duration_s': 30.0, 'filter.lever_arm_m': [41.0, -11.0, 15.5], 'filter.lever_arm_sigma_m': 2.0}
-    sc = scenario.load('deck', {**ov, 'filter.lever_arm_states': True})
+    sc = scenario.load('deck_paper', {**ov, 'filter.lever_arm_states': True})
     res = pipeline.run(sc, keep_truth=False)
     e = res.estimates[-1]
     truth_dr = np.array([-1.0, 1.0, -0.5])
@@ -114,7 +114,7 @@ def test_lever_arm_states_recover_a_surveying_error():
     assert np.all(np.abs(res.filter.corrections.dr - truth_dr) < 3.0 * sig_dr) and np.all(sig_dr < 0.05)
     err = e.misalignment - np.array(sc.aircraft.misalignment_arcmin) * ARCMIN
     assert np.all(np.abs(err) < 3.0 * e.misalignment_sigma)
-    e0 = pipeline.run(scenario.load('deck', ov), keep_truth=False).estimates[-1]
+    e0 = pipeline.run(scenario.load('deck_paper', ov), keep_truth=False).estimates[-1]
     err0 = e0.misalignment - np.array(sc.aircraft.misalignment_arcmin) * ARCMIN
     assert np.max(np.abs(err0)) > 10.0 * ARCMIN
 
@@ -127,7 +127,7 @@ def test_lever_arm_treatments():
     than none."""
     err = {}
     for tr in ('compensation', 'none', 'butterworth'):
-        sc = scenario.load('deck', {'duration_s': 10.0, 'filter.lever_arm_treatment': tr})
+        sc = scenario.load('deck_paper', {'duration_s': 10.0, 'filter.lever_arm_treatment': tr})
         e = pipeline.run(sc, keep_truth=False).estimates[-1]
         err[tr] = np.max(np.abs(e.misalignment - np.array(sc.aircraft.misalignment_arcmin) * ARCMIN))
     assert err['compensation'] < 1.0 * ARCMIN
@@ -137,7 +137,7 @@ def test_lever_arm_treatments():
 @pytest.mark.parametrize('algorithm,shape', [('stf', ()), ('stf_multiple', (15,)), ('fading_tested', ()),
                                               ('combined', ())])
 def test_fading_factors_reach_the_outputs(algorithm, shape):
-    sc = scenario.load('catapult', {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0,
+    sc = scenario.load('catapult_paper', {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0,
                                     'filter.algorithm': algorithm, 'filter.fading_gamma': 2.0, 'filter.stf_beta': 1.0})
     res = pipeline.run(sc, keep_truth=False)
     lam = [np.asarray(e.fading) for e in res.estimates]

@@ -21,7 +21,7 @@ from alignment_core.geometry import earth
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import ARCMIN, DEG, DPH, UG
 
-SC = scenario.load('catapult', {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0}, seed=7)
+SC = scenario.load('catapult_paper', {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0}, seed=7)
 START = 300                      # the gap starts at 3 s
 
 

@@ -17,7 +17,7 @@ SEEDS = (1, 2, 3)
 def _errors(**ov):
     out = []
     for seed in SEEDS:
-        sc = scenario.load('catapult', {**SHORT, **ov}, seed=seed)
+        sc = scenario.load('catapult_paper', {**SHORT, **ov}, seed=seed)
         res = pipeline.run(sc, keep_truth=False)
         e = res.estimates[-1]
         mu = np.asarray(sc.aircraft.misalignment_arcmin) * ARCMIN
@@ -31,9 +31,9 @@ def bow():
 
 
 def test_the_scenario_gives_the_filter_and_the_ldv_the_heading():
-    sc = scenario.load('catapult', {'aircraft.heading_on_deck_deg': -9.0})
+    sc = scenario.load('catapult_paper', {'aircraft.heading_on_deck_deg': -9.0})
     assert sc.filter.heading_on_deck_deg == -9.0 and sc.ldv.track_heading_deg == -9.0
-    sc = scenario.load('catapult', {'aircraft.heading_on_deck_deg': -9.0, 'filter.heading_on_deck_deg': -8.0})
+    sc = scenario.load('catapult_paper', {'aircraft.heading_on_deck_deg': -9.0, 'filter.heading_on_deck_deg': -8.0})
     assert sc.filter.heading_on_deck_deg == -8.0
 
 

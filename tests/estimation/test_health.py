@@ -21,7 +21,7 @@ def test_single_precision_seed003_breakdown_is_held_not_raised(algorithm):
     the 21-state model (here within the first second: a 0.1' attitude match against a 1 deg
     prior is a 3.6e5 variance ratio, beyond float32's 7 digits). It used to raise LinAlgError
     (fading_tested, stf_multiple) or run on with negative variances (kf)."""
-    sc = scenario.load('catapult', {**F32_SEED003, 'filter.algorithm': algorithm}, seed=3)
+    sc = scenario.load('catapult_paper', {**F32_SEED003, 'filter.algorithm': algorithm}, seed=3)
     res = pipeline.run(sc, keep_truth=False)
     f, out = res.filter, res.estimates
     assert f.counters.numerical_failures >= 1 and not f.healthy and f.failure
@@ -37,7 +37,7 @@ def test_single_precision_seed003_breakdown_is_held_not_raised(algorithm):
 
 @pytest.mark.parametrize('algorithm', ['carlson', 'ud', 'combined'])
 def test_square_root_filters_stay_healthy_in_single_precision(algorithm):
-    sc = scenario.load('catapult', {**F32_SEED003, 'filter.algorithm': algorithm}, seed=3)
+    sc = scenario.load('catapult_paper', {**F32_SEED003, 'filter.algorithm': algorithm}, seed=3)
     res = pipeline.run(sc, keep_truth=False)
     assert res.filter.counters.numerical_failures == 0 and all(e.healthy for e in res.estimates)
 
@@ -49,7 +49,7 @@ def test_a_corrupted_master_sample_breaks_the_filter_down_and_the_last_estimate_
     master velocity corrupted to ~1e200 m/s overflows (a non-finite NIS) at its update. The
     outputs before it are the clean run's, the ones after hold the last good estimate (the output
     at the master sample before it), and the engine keeps publishing to the end."""
-    sc = scenario.load('catapult', {**SHORT, 'filter.algorithm': algorithm, 'filter.master_speed_max_mps': 1e300})
+    sc = scenario.load('catapult_paper', {**SHORT, 'filter.algorithm': algorithm, 'filter.master_speed_max_mps': 1e300})
     inp = pipeline.simulate(sc)
     ref = pipeline.align(sc, inp)
     k = 201                                   # the master sample after the output at 2.0 s
@@ -76,7 +76,7 @@ def test_a_corrupted_master_sample_breaks_the_filter_down_and_the_last_estimate_
 def test_by_default_an_absurd_master_velocity_is_rejected_at_the_push():
     """The same 1e200 m/s master sample is beyond filter.master_speed_max_mps (100 m/s): rejected
     and counted as 'range', it never reaches the filter, which stays healthy and misses one update."""
-    sc = scenario.load('catapult', SHORT)
+    sc = scenario.load('catapult_paper', SHORT)
     inp = pipeline.simulate(sc)
     ref = pipeline.align(sc, inp)
     master = list(inp.master)

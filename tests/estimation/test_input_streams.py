@@ -16,7 +16,7 @@ from alignment_core.estimation.engine import TransferAlignment
 from alignment_core.estimation.health import OK, WARN
 
 NS = 1_000_000_000
-SC = scenario.load('catapult', {'duration_s': 15.0, 'aircraft.catapult.launch_time_s': 8.0}, seed=3)
+SC = scenario.load('catapult_paper', {'duration_s': 15.0, 'aircraft.catapult.launch_time_s': 8.0}, seed=3)
 
 
 @pytest.fixture(scope='module')

@@ -30,7 +30,7 @@ def _feed(sc, inp, keep):
 
 
 def test_no_history_same_estimates():
-    sc = scenario.load('catapult', {'duration_s': 6.0, 'aircraft.catapult.enabled': False})
+    sc = scenario.load('catapult_paper', {'duration_s': 6.0, 'aircraft.catapult.enabled': False})
     inp = pipeline.simulate(sc)
     full, a = _feed(sc, inp, True)
     lean, b = _feed(sc, inp, False)

@@ -26,7 +26,7 @@ def _run(sc, ldv):
 
 
 def test_a_single_ldv_spike_on_the_parked_deck_is_not_a_launch():
-    sc = scenario.load('deck', {'duration_s': 6.0})
+    sc = scenario.load('deck_paper', {'duration_s': 6.0})
     spike_ns = sc.t0_ns + 3_000_000_000
 
     def spiked(s):
@@ -45,7 +45,7 @@ def test_the_catapult_launch_is_dated_at_its_first_sample():
     LDV sample above the threshold, and the held samples are integrated into the deck displacement
     from it on (the trapezoids of every valid sample pair from the one before the first, which
     opens the stroke's first interval, to the last)."""
-    sc = scenario.load('catapult', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 2.0})
+    sc = scenario.load('catapult_paper', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 2.0})
     f, inp = _run(sc, lambda s: s)
     first = next(s.t_ns for s in inp.ldv if s.valid and np.linalg.norm(s.v_s) > sc.filter.launch_detect_mps)
     assert f.deck_motion.t_launch_ns == first
@@ -73,7 +73,7 @@ def test_hold_back_creep_is_deck_motion_but_not_the_launch():
     motion = f.deck_motion
     assert hold < motion.t_moving_ns < launch <= motion.t_launch_ns < launch + 100_000_000
     # a parked deck never creeps: the 1 cm/s LDV noise stays far below the median threshold
-    g, _ = _run(scenario.load('deck', {'duration_s': 60.0}), lambda s: s)
+    g, _ = _run(scenario.load('deck_paper', {'duration_s': 60.0}), lambda s: s)
     assert g.counters.creep_detected == 0 and not g.deck_motion.moving
 
 
@@ -131,7 +131,7 @@ def test_an_ldv_run_the_accelerometers_do_not_feel_is_not_a_launch():
     10 m/s along the aircraft's x axis, which the accelerometers would integrate; they felt
     nothing (the deck's motion, < 0.1 m/s), so the run is released as parked and counted, and
     the matches go on as in the clean run."""
-    sc = scenario.load('deck', {'duration_s': 6.0})
+    sc = scenario.load('deck_paper', {'duration_s': 6.0})
     t0 = sc.t0_ns + 3_000_000_000
     fake = {t0 + k * 10_000_000 for k in range(5)}
 
@@ -151,7 +151,7 @@ def test_an_ldv_run_the_accelerometers_do_not_feel_is_not_a_launch():
 def test_the_catapult_is_felt_and_dated_as_without_the_check():
     """The 2 g stroke: by the third LDV sample (0.59 m/s) the accelerometers integrated ~0.6 m/s,
     well above the 0.5 * 0.59 - 0.2 m/s required: the same launch, at the same time."""
-    sc = scenario.load('catapult', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 2.0})
+    sc = scenario.load('catapult_paper', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 2.0})
     f, _ = _run(sc, lambda s: s)
     off = replace(sc, filter=replace(sc.filter, launch_felt_fraction=0.0))
     f0, _ = _run(off, lambda s: s)

@@ -37,13 +37,13 @@ def test_launch_noise_is_added_to_the_velocity_states_in_its_window_only():
     q, window = 0.3, 0.25
     ov = {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 2.0, 'master.rate_hz': 10.0,
           'filter.launch_noise_s': window}
-    sc = scenario.load('catapult', ov)
+    sc = scenario.load('catapult_paper', ov)
     inp = pipeline.simulate(sc)
     stamps = {m.t_ns for m in inp.master}
     inp = dataclasses.replace(inp, ldv=[dataclasses.replace(s, valid=False) if s.t_ns in stamps else s
                                         for s in inp.ldv])
-    off = pipeline.align(scenario.load('catapult', {**ov, 'filter.launch_accel_noise_mps2': 0.0}), inp)
-    on = pipeline.align(scenario.load('catapult', {**ov, 'filter.launch_accel_noise_mps2': q}), inp)
+    off = pipeline.align(scenario.load('catapult_paper', {**ov, 'filter.launch_accel_noise_mps2': 0.0}), inp)
+    on = pipeline.align(scenario.load('catapult_paper', {**ov, 'filter.launch_accel_noise_mps2': q}), inp)
     assert off.counters.updates == on.counters.updates == 0
     fast = [s.t_ns for s in inp.ldv if s.valid and np.linalg.norm(s.v_s) > sc.filter.launch_detect_mps]
     t_l, confirmed = fast[0], fast[sc.filter.launch_confirm_samples - 1]
@@ -73,7 +73,7 @@ def test_launch_noise_makes_the_kf_honest_under_vibration():
     for label, extra in (('off', {'filter.launch_accel_noise_mps2': 0.0}), ('on', LAUNCH_NOISE)):
         v = []
         for seed in range(1, n + 1):
-            err, sig, _ = _release(scenario.load('catapult', {**BASE, **extra}, seed=seed))
+            err, sig, _ = _release(scenario.load('catapult_paper', {**BASE, **extra}, seed=seed))
             v.append(np.sum((err / sig) ** 2))
         nees[label] = float(np.mean(v))
     assert nees['off'] > 5 * hi
@@ -88,10 +88,10 @@ def test_capped_strong_tracking_stays_linear_with_point_samples():
     Capped at 1.2 per step, with the launch noise, the errors stay below
     the degree, within the model's linear range, and every fading factor respects the cap."""
     ov = {**BASE, 'imu.output': 'sample', 'filter.algorithm': 'stf'}
-    err_free, _, _ = _release(scenario.load('catapult', {**ov, 'filter.stf_lambda_max': 1e6}, seed=1))
+    err_free, _, _ = _release(scenario.load('catapult_paper', {**ov, 'filter.stf_lambda_max': 1e6}, seed=1))
     assert np.max(np.abs(err_free)) > 10.0 * np.pi / 180.0
     capped = {**ov, 'filter.stf_lambda_max': 1.2, 'filter.launch_accel_noise_mps2': 0.05,
               'filter.launch_noise_s': 0.5}
-    err, sig, res = _release(scenario.load('catapult', capped, seed=1))
+    err, sig, res = _release(scenario.load('catapult_paper', capped, seed=1))
     assert np.max(np.abs(err)) < 1.0 * np.pi / 180.0 and np.all(np.isfinite(sig))
     assert max(np.max(e.fading) for e in res.estimates) <= 1.2

@@ -19,7 +19,7 @@ VERTICAL = {'ldv.mode': 'beam', 'ldv.mount_m': [40.0, -10.0, 35.0], 'ldv.reflect
 
 
 def _deck(extra: dict, seconds: float = 90.0, seed: int = 1):
-    sc = scenario.load('deck', {'duration_s': seconds, **extra}, seed=seed)
+    sc = scenario.load('deck_paper', {'duration_s': seconds, **extra}, seed=seed)
     res = pipeline.run(sc, keep_truth=False)
     e = res.estimates[-1]
     return sc, res, (e.misalignment - np.array(sc.aircraft.misalignment_arcmin) * ARCMIN), e.misalignment_sigma
@@ -45,7 +45,7 @@ def test_a_beam_sample_for_a_vector_filter_is_rejected_and_counted():
     """filter.ldv_mode given as vector against a beam LDV: its samples would be read as full
     velocity vectors (wrong); they are rejected as `ldv_mode`, nothing is matched (relative velocity
     `ldv`: under `auto` a stream with no usable sample is taken as absent and matched as parked)."""
-    sc = scenario.load('deck', {'duration_s': 2.0, 'ldv.mode': 'beam', 'filter.ldv_mode': 'vector',
+    sc = scenario.load('deck_paper', {'duration_s': 2.0, 'ldv.mode': 'beam', 'filter.ldv_mode': 'vector',
                                 'filter.relative_velocity': 'ldv'})
     res = pipeline.run(sc, keep_truth=False)
     c = res.filter.counters
@@ -55,4 +55,4 @@ def test_a_beam_sample_for_a_vector_filter_is_rejected_and_counted():
 
 def test_beam_needs_a_model_with_three_velocity_rows():
     with pytest.raises(ConfigError, match='ldv_mode beam'):
-        scenario.load('deck', {'ldv.mode': 'beam', 'filter.model': 'seed002_10'})
+        scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.model': 'seed002_10'})

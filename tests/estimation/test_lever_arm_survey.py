@@ -16,7 +16,7 @@ def test_lever_arm_states_approach_the_surveyed_arms_error(seed):
     (6000 matches) resolve it to a few millimetres (sigma ~ 5 mm/s / 0.015 rad/s / sqrt(6000)).
     The estimate dr = r_true - r_used must lie within 3 sigma of the drawn error, and that sigma
     must be well below the error itself (so the test sees the states learn, not the prior)."""
-    sc = scenario.load('deck', {'duration_s': 60.0, 'aircraft.lever_arm_survey_sigma_m': 0.05,
+    sc = scenario.load('deck_paper', {'duration_s': 60.0, 'aircraft.lever_arm_survey_sigma_m': 0.05,
                                 'filter.lever_arm_states': True, 'filter.lever_arm_sigma_m': 0.1}, seed=seed)
     truth = np.subtract(sc.aircraft.lever_arm_m, sc.filter.lever_arm_m)
     assert np.linalg.norm(truth) > 0.02

@@ -13,11 +13,11 @@ CATAPULT = {'duration_s': 6.0, 'aircraft.catapult.launch_time_s': 3.0}
 
 @pytest.fixture(scope='module')
 def inputs():
-    return pipeline.simulate(scenario.load('catapult', CATAPULT))
+    return pipeline.simulate(scenario.load('catapult_paper', CATAPULT))
 
 
 def _stamps(rate_hz: float, inp) -> np.ndarray:
-    sc = scenario.load('catapult', {**CATAPULT, 'filter.output_rate_hz': rate_hz})
+    sc = scenario.load('catapult_paper', {**CATAPULT, 'filter.output_rate_hz': rate_hz})
     return np.array([e.t_ns for e in pipeline.align(sc, inp).outputs], dtype=np.int64)
 
 

@@ -21,7 +21,7 @@ from alignment_core.estimation.reference_force import SpotAcceleration, referenc
 from alignment_core.units import ARCMIN
 from alignment_core.validation import ConfigError
 
-# carrier_deck's ship, beam LDV and filter, without the pieces that are not at issue here
+# deck's ship, beam LDV and filter, without the pieces that are not at issue here
 PLAIN = {'duration_s': 30.0, 'aircraft.gear.enabled': False, 'aircraft.flexure.enabled': False,
          'filter.lever_arm_states': False, 'aircraft.lever_arm_survey_sigma_m': 0.0,
          'master.model': 'constant', 'master.rate_hz': 100.0, 'master.latency_s': 0.0,
@@ -29,7 +29,7 @@ PLAIN = {'duration_s': 30.0, 'aircraft.gear.enabled': False, 'aircraft.flexure.e
 
 
 def _heading_sigma(force: str, roll_mounting_arcmin: float) -> float:
-    sc = scenario.load('carrier_deck', {**PLAIN, 'filter.specific_force': force,
+    sc = scenario.load('deck', {**PLAIN, 'filter.specific_force': force,
                                         'aircraft.misalignment_arcmin': [roll_mounting_arcmin, 0.0, 0.0]}, seed=2)
     return float(pipeline.run(sc, keep_truth=False).estimates[-1].misalignment_sigma[2] / ARCMIN)
 
@@ -74,9 +74,9 @@ def test_reference_specific_force_is_the_spot_acceleration_plus_coriolis_horizon
 
 def test_reference_force_options_are_validated():
     with pytest.raises(ConfigError, match='specific_force'):
-        scenario.load('carrier_deck', {'filter.specific_force': 'master'})
+        scenario.load('deck', {'filter.specific_force': 'master'})
     with pytest.raises(ConfigError, match='reference_force_window_s'):
-        scenario.load('carrier_deck', {'filter.reference_force_window_s': 0.0})
+        scenario.load('deck', {'filter.reference_force_window_s': 0.0})
     with pytest.raises(ConfigError, match='specific_force reference'):
         scenario.load('seed001', {'filter.specific_force': 'reference'})
 
@@ -102,10 +102,10 @@ def test_spot_acceleration_takes_the_lever_arm_of_the_newest_sample():
 
 
 def _vector_ldv_delay(acceleration: str) -> tuple[float, float]:
-    """carrier_deck with a vector LDV, the aircraft on its gear (the LDV flags it creeping, so the
+    """deck with a vector LDV, the aircraft on its gear (the LDV flags it creeping, so the
     delay's column is taken as moving), 30 ms of master latency not told: the delay estimate and
     its sigma (s) after 30 s."""
-    sc = scenario.load('carrier_deck', {'duration_s': 30.0, 'ldv.mode': 'vector', 'master.latency_jitter_s': 0.0,
+    sc = scenario.load('deck', {'duration_s': 30.0, 'ldv.mode': 'vector', 'master.latency_jitter_s': 0.0,
                                         'filter.specific_force': 'slave', 'filter.delay_acceleration': acceleration},
                        seed=2)
     al = pipeline.align(sc, pipeline.simulate(sc))

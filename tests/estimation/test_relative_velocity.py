@@ -20,7 +20,7 @@ NS = 1_000_000_000
 @pytest.fixture(scope='module')
 def deck():
     """40 s of the deck scenario (parked the whole time) and its inputs."""
-    sc = scenario.load('deck', overrides={'duration_s': 40.0})
+    sc = scenario.load('deck_paper', overrides={'duration_s': 40.0})
     return sc, pipeline.simulate(sc)
 
 

@@ -52,7 +52,7 @@ def test_a_run_publishes_the_accumulated_biases_and_finds_the_latency():
     """60 s on the deck, master latency 20 ms unknown to the filter but with the delay state: the
     published master_delay_s is 20 ms within 3 sigma (sigma below 1 ms); the bias states are the
     engine's accumulated corrections, not the last update's."""
-    sc = scenario.load('deck', overrides={'duration_s': 60.0, 'master.latency_s': 0.02,
+    sc = scenario.load('deck_paper', overrides={'duration_s': 60.0, 'master.latency_s': 0.02,
                                           'filter.master_delay_state': True})
     f = pipeline.align(sc, pipeline.simulate(sc))
     e = f.outputs[-1]

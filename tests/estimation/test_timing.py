@@ -119,7 +119,7 @@ def test_ldv_nearest_valid_sample_only_while_parked():
 
 # ----- the engine on the catapult scenario -----
 def _final(**ov):
-    sc = scenario.load('catapult', {**SHORT, **ov})
+    sc = scenario.load('catapult_paper', {**SHORT, **ov})
     res = pipeline.run(sc, keep_truth=False)
     e = res.estimates[-1]                     # held since the release (matching stopped)
     assert not e.matching
@@ -185,7 +185,7 @@ def test_ldv_later_than_master_defers_the_match(zero_latency):
 def test_outputs_do_not_depend_on_arrival_order_with_latencies_and_rates():
     """Deferred matches (LDV later than the master, master at half the IMU rate, off-grid
     latencies) still depend only on the streams' contents, not on how they interleave."""
-    sc = scenario.load('catapult', {'duration_s': 5.0, 'aircraft.catapult.launch_time_s': 3.0, 'master.rate_hz': 50.0,
+    sc = scenario.load('catapult_paper', {'duration_s': 5.0, 'aircraft.catapult.launch_time_s': 3.0, 'master.rate_hz': 50.0,
                                     'master.latency_s': 0.013, 'ldv.latency_s': 0.03, 'filter.master_latency_s': 0.013,
                                     'filter.ldv_latency_s': 0.03})
     inp = pipeline.simulate(sc)
@@ -225,7 +225,7 @@ def test_outputs_carry_their_validity_time():
     """Each output's misalignment refers to the stamp less the master latency the filter is told
     (the matches' validity time); without a latency told, the stamp itself."""
     for told_ns in (0, 20 * MS):
-        sc = scenario.load('catapult', {**SHORT, 'duration_s': 3.0, 'master.latency_s': 0.02,
+        sc = scenario.load('catapult_paper', {**SHORT, 'duration_s': 3.0, 'master.latency_s': 0.02,
                                         'filter.master_latency_s': told_ns * 1e-9})
         est = pipeline.run(sc, keep_truth=False).estimates
         assert len(est) > 10

@@ -60,7 +60,7 @@ def _run(latency_s: float, known: bool):
     ov = {'duration_s': 40.0, 'master.latency_s': latency_s}
     if known:
         ov['filter.master_latency_s'] = latency_s
-    sc = scenario.load('deck', overrides=ov)
+    sc = scenario.load('deck_paper', overrides=ov)
     return pipeline.align(sc, pipeline.simulate(sc))
 
 

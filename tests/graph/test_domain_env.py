@@ -23,7 +23,7 @@ def test_run_graph_honours_an_exported_domain(tmp_path):
     dom = domain.claim()
     domain.release(dom)
     env = dict(os.environ, ROS_DOMAIN_ID=str(dom))
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(tmp_path / 'run'),
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult_paper', '--out', str(tmp_path / 'run'),
            '--real-time-factor', '2']
     for s in SETS:
         cmd += ['--set', s]

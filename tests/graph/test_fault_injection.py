@@ -35,8 +35,8 @@ from alignment_ros import convert, topics
 from alignment_ros.bag import BagReader
 
 ROOT = Path(__file__).resolve().parents[2]
-PARAMS = ROOT / 'config/params/graph.yaml'       # the catapult scenario's filter (what the replay runs)
-SC = scenario.load('catapult', {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0}, seed=7)
+PARAMS = ROOT / 'config/params/catapult_paper.yaml'       # the papers' catapult filter (what the replay runs)
+SC = scenario.load('catapult_paper', {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0}, seed=7)
 K = 400                                           # the faults start at the 400th sample (4 s, parked)
 TOL = 0.3 * ARCMIN
 STORE = get_typestore(Stores.ROS2_JAZZY)

@@ -23,7 +23,7 @@ def graph_run(tmp_path_factory) -> Path:
     """One short catapult run through the graph; while it runs, echo.sh prints one live
     /alignment/misalignment message (saved as echo.txt next to the run)."""
     out = tmp_path_factory.mktemp('graph') / 'run'
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(out),
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult_paper', '--out', str(out),
            '--real-time-factor', '2']
     for s in SETS:
         cmd += ['--set', s]

@@ -24,7 +24,7 @@ SETS = ['duration_s=4.0', 'seed=5', 'ldv.mode=beam', 'ldv.reflector_m=[2.0,0.3,-
 
 def test_carrier_options_graph_equals_batch(tmp_path):
     out = tmp_path / 'run'
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck', '--out', str(out), '--real-time-factor', '0',
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck_paper', '--out', str(out), '--real-time-factor', '0',
            '--timeout', '900']
     for s in SETS:
         cmd += ['--set', s]

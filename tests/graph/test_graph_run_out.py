@@ -23,7 +23,7 @@ SETS = ['duration_s=4.0', 'seed=5', 'master.rate_hz=50.0', 'master.latency_s=0.0
 @pytest.fixture(scope='module')
 def graph_run(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp('run_out') / 'run'
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck', '--out', str(out), '--real-time-factor', '0',
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck_paper', '--out', str(out), '--real-time-factor', '0',
            '--timeout', '900', '--no-plots']
     for s in SETS:
         cmd += ['--set', s]

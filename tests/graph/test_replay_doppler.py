@@ -21,7 +21,7 @@ SETS = ['duration_s=8.0', 'aircraft.catapult.launch_time_s=4.0', 'seed=7', 'filt
 @pytest.fixture(scope='module')
 def runs(tmp_path_factory) -> tuple[Path, Path]:
     base = tmp_path_factory.mktemp('doppler')
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(base / 'run'),
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult_paper', '--out', str(base / 'run'),
            '--real-time-factor', '0']
     for s in SETS:
         cmd += ['--set', s]

@@ -24,7 +24,7 @@ SETS = ['duration_s=14.0', 'aircraft.catapult.launch_time_s=8.0']
 
 
 def test_truth_free_replay_of_an_imported_log(tmp_path):
-    given = core_scenario.given_data('catapult', core_scenario.parse_overrides(SETS))
+    given = core_scenario.given_data('catapult_paper', core_scenario.parse_overrides(SETS))
     sc = core_scenario.resolve(given)
     inp = pipeline.simulate(sc)
     batch = pipeline.align(sc, inp)

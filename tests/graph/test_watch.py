@@ -58,7 +58,7 @@ def _on_pty(cmd: list[str], timeout: float = 400.0) -> tuple[subprocess.Complete
 @pytest.fixture(scope='module')
 def tty_run(tmp_path_factory) -> tuple[Path, str]:
     out = tmp_path_factory.mktemp('watch') / 'run'
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(out)]
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult_paper', '--out', str(out)]
     for s in SETS:
         cmd += ['--set', s]
     p, tty = _on_pty(cmd)

@@ -21,10 +21,10 @@ LEVER_ARM = [60.0, -15.0, 20.0]
 
 
 @pytest.mark.parametrize('name,overrides', [
-    ('deck', {}),
+    ('deck_paper', {}),
     # the same rolling deck with a catapult that never fires within the run
-    ('catapult', {'aircraft.catapult.launch_time_s': 1000.0}),
-], ids=['deck', 'catapult-never-fires'])
+    ('catapult_paper', {'aircraft.catapult.launch_time_s': 1000.0}),
+], ids=['deck_paper', 'catapult-never-fires'])
 def test_lever_arm_point_on_rolling_deck(name, overrides):
     sc = scenario.load(name, {**NOISE_OFF, 'ship.sea_state': 5, 'aircraft.lever_arm_m': LEVER_ARM,
                               'duration_s': 300.0, **overrides})
@@ -39,7 +39,7 @@ def test_lever_arm_point_on_rolling_deck(name, overrides):
 
 @pytest.fixture(scope='module')
 def catapult_run():
-    sc = scenario.load('catapult', NOISE_OFF)
+    sc = scenario.load('catapult_paper', NOISE_OFF)
     ship_list, truth, imu = simulate(sc)
     return sc, ship_list, truth, imu
 
@@ -108,7 +108,7 @@ def test_release_off_exact_float_sum():
     1.1 + 2.2 != 3.3 in floating point. The run must still go through the release: on deck up to
     3.3 s with the deck-relative speed a T = 2 g x 2.2 s along the track, then free flight at
     the release velocity (constant in the nav frame)."""
-    sc = scenario.load('catapult', {'duration_s': 5.0, 'aircraft.catapult.launch_time_s': 1.1,
+    sc = scenario.load('catapult_paper', {'duration_s': 5.0, 'aircraft.catapult.launch_time_s': 1.1,
                                     'aircraft.catapult.stroke_s': 2.2})
     res = pipeline.run(sc)
     tau = np.array([(t.t_ns - sc.t0_ns) / 1e9 for t in res.truth])
@@ -127,7 +127,7 @@ def test_release_off_exact_float_sum():
 def test_batch_equals_step():
     """run_batch promises the same numbers as calling step sample by sample (checked across
     the launch and the release of a short catapult run)."""
-    sc = scenario.load('catapult', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 1.0,
+    sc = scenario.load('catapult_paper', {'duration_s': 4.0, 'aircraft.catapult.launch_time_s': 1.0,
                                     'aircraft.catapult.stroke_s': 2.0})
     ship_list = pipeline.ship_samples(sc)
     truth_b, imu_b = pipeline.SlaveImuStage(sc).run_batch(ShipBatch.of(ship_list))

@@ -23,14 +23,14 @@ from alignment_core.config import scenario
 from alignment_ros import convert, domain, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]
-PARAMS = ROOT / 'config/params/graph.yaml'
+PARAMS = ROOT / 'config/params/catapult_paper.yaml'
 # single-precision plain KF on the 21 states: breaks down within 3 s (with the 5 mm/s parked allowance)
 BROKEN = {'filter.model': 'seed003_21', 'filter.float32': True, 'filter.algorithm': 'kf',
           'filter.parked_velocity_sigma_mps': 0.005}
 
 
 def test_breakdown_is_held_and_reported_not_raised():
-    sc = scenario.load('catapult', BROKEN)
+    sc = scenario.load('catapult_paper', BROKEN)
     inp = pipeline.simulate(sc)
     n = 301                                   # 3 s of data
     ref = pipeline.align(sc, dataclasses.replace(

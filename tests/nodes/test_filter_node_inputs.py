@@ -14,7 +14,7 @@ from alignment_core.units import G0, KNOT
 from alignment_filter_node.node import FilterInputs
 from alignment_ros import convert, topics
 
-SC = scenario.load('catapult', {'duration_s': 3.0, 'aircraft.catapult.launch_time_s': 2.0})
+SC = scenario.load('catapult_paper', {'duration_s': 3.0, 'aircraft.catapult.launch_time_s': 2.0})
 
 
 @pytest.fixture(scope='module')

@@ -22,7 +22,7 @@ SILENCE = {'filter.ldv_silence_s': 2.0}
 
 
 def test_no_ldv_stream_aligns_with_zero_relative_velocity_and_says_so(ros):
-    sc = scenario.load('catapult', SILENCE)
+    sc = scenario.load('catapult_paper', SILENCE)
     inp = pipeline.simulate(sc)
     n = 601                                   # 6 s of data, all on the deck
     ref = pipeline.align(sc, dataclasses.replace(

@@ -20,8 +20,8 @@ from alignment_core.units import DEG
 from alignment_ros import convert, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]
-PARAMS = ROOT / 'config/params/graph.yaml'
-SC = scenario.load('catapult')
+PARAMS = ROOT / 'config/params/catapult_paper.yaml'
+SC = scenario.load('catapult_paper')
 
 
 def test_master_node_equals_its_core_stage(ros):
@@ -47,7 +47,7 @@ def test_master_node_equals_its_core_stage(ros):
 
 def test_filter_node_rejects_bad_input_and_reports_it(ros):
     node, start = ros
-    sc = scenario.load('catapult')
+    sc = scenario.load('catapult_paper')
     inp = pipeline.simulate(sc)
     n = 301                                   # 3 s of data
     pubs = {t: node.create_publisher(ty, t, qos.STREAM) for t, ty in

@@ -31,7 +31,7 @@ GO = '/test/start_pacing'       # the node starts once it discovers a subscripti
 
 def test_simulation_time_advances_at_the_real_time_factor(ros):
     node, start = ros
-    n = scenario.load('catapult', {'duration_s': DURATION_S}).n_samples
+    n = scenario.load('catapult_paper', {'duration_s': DURATION_S}).n_samples
     got: list[tuple[float, float]] = []             # (wall s at receipt, simulation s)
     sub = node.create_subscription(Clock, topics.CLOCK,
                                    lambda m: got.append((time.monotonic(), convert.to_ns(m.clock) * 1e-9)),
@@ -79,7 +79,7 @@ def test_the_ship_runs_no_further_than_its_lead_ahead_of_a_paced_stream(ros):
     paced stream is within max_lead_s of it: nothing on the stream, it stops at t0 + lead; the
     stream at t0 + 1 s lets it on to t0 + 1 s + lead, and no further."""
     node, start = ros
-    sc = scenario.load('catapult', {'duration_s': 20.0})
+    sc = scenario.load('catapult_paper', {'duration_s': 20.0})
     got: list[float] = []
     sub = node.create_subscription(Clock, topics.CLOCK, lambda m: got.append(convert.to_ns(m.clock) * 1e-9),
                                    qos.STREAM)

@@ -163,7 +163,7 @@ def bags(tmp_path_factory) -> dict[str, Path]:
     """A short catapult graph run (its bag), and record.sh recordings of the same run."""
     out = tmp_path_factory.mktemp('conformance')
     env = {k: v for k, v in os.environ.items() if k != 'ROS_DOMAIN_ID'}
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(out / 'run'),
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult_paper', '--out', str(out / 'run'),
            '--real-time-factor', '2']
     for s in SETS:
         cmd += ['--set', s]

@@ -65,7 +65,7 @@ def test_dds_sockets_are_bound_to_loopback_only(ros):
     spin_until(node, lambda: pub.get_subscription_count() >= 1
                and node.count_publishers(topics.MASTER_ODOM) >= 1)
     time.sleep(1.0)
-    ships = pipeline.ship_samples(scenario.load('catapult'))[:50]
+    ships = pipeline.ship_samples(scenario.load('catapult_paper'))[:50]
     for s in ships:
         pub.publish(convert.ship_to_msgs(s)[0])
     spin_until(node, lambda: len(got) == len(ships))       # the loopback transports carry data

@@ -26,7 +26,7 @@ SETS = ['duration_s=14.0', 'aircraft.catapult.launch_time_s=8.0']
 
 @pytest.fixture(scope='module')
 def run():
-    sc = core_scenario.load('catapult', core_scenario.parse_overrides(SETS))
+    sc = core_scenario.load('catapult_paper', core_scenario.parse_overrides(SETS))
     inp = pipeline.simulate(sc)
     return sc, inp, pipeline.align(sc, inp)
 

@@ -51,7 +51,7 @@ def cmdline(pid: int) -> str:
 
 def start_run(out: Path) -> tuple[subprocess.Popen, list[int]]:
     """run_graph.sh on a free domain, once all its processes run and it records messages."""
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult', '--out', str(out),
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'catapult_paper', '--out', str(out),
            '--real-time-factor', '1']
     for s in SETS:
         cmd += ['--set', s]

@@ -66,7 +66,7 @@ def test_non_negative_finite_numbers(text, ok):
             parse(text)
 
 
-@pytest.mark.parametrize('scenario', ['catapult', 'seed004'])
+@pytest.mark.parametrize('scenario', ['catapult_paper', 'seed004'])
 def test_the_end_of_a_run_is_judged_on_stamped_topics_only(scenario):
     """An unstamped topic is logged at the recorder's latest /clock, which under load lags the
     other streams: its last message can be logged before the end time, and the run would wait

@@ -20,7 +20,8 @@ from alignment_ros import domain, params
 from alignment_ros.graph import params_yaml
 
 ROOT = Path(__file__).resolve().parents[2]
-GRAPH_YAML = ROOT / 'config/params/graph.yaml'
+GRAPH_YAML = ROOT / 'config/params/graph.yaml'                # the default scenario's
+PAPER_YAML = ROOT / 'config/params/catapult_paper.yaml'       # the papers' catapult world
 NODES = {'ship_motion_node': 'ShipMotionNode', 'master_ins_node': 'MasterInsNode',
          'slave_ins_node': 'SlaveInsNode', 'ldv_node': 'LdvNode',
          'alignment_filter_node': 'AlignmentFilterNode', 'air_data_node': 'AirDataNode',
@@ -30,13 +31,13 @@ ARM = [60.0, -15.0, 20.0]
 
 @pytest.fixture
 def make_node():
-    """make_node(name, *ros_args): the project's node `name` built with the default params file
-    and ros_args (`-p KEY:=VALUE` ...), as start_node.sh would start it."""
+    """make_node(name, *ros_args): the project's node `name` built with the papers' catapult params
+    file (its lever arm exact: the filter's follows the aircraft's) and ros_args (`-p KEY:=VALUE` ...), as start_node.sh would start it."""
     dom = domain.claim()
     made = []
 
     def make(name: str, *ros_args: str):
-        argv = ['test', '--ros-args', '--params-file', str(GRAPH_YAML), *ros_args]
+        argv = ['test', '--ros-args', '--params-file', str(PAPER_YAML), *ros_args]
         rclpy.try_shutdown()                    # one node per context
         rclpy.init(args=argv, domain_id=dom)
         made.append(True)
@@ -124,10 +125,10 @@ def test_descriptors_carry_type_description_choices_and_bounds(make_node):
 # ---- one resolver for both paths --------------------------------------------------------
 
 def test_node_lever_arm_follows_as_with_set(make_node):
-    """-p aircraft.lever_arm_m on a node over the default params file = --set on the command line:
+    """-p aircraft.lever_arm_m on a node over a params file = --set on the command line:
     the filter's arm and the LDV's origin follow, unless given themselves."""
     arm = '[' + ','.join(repr(x) for x in ARM) + ']'
-    sets = scenario.load('catapult', {'aircraft.lever_arm_m': ARM})
+    sets = scenario.load('catapult_paper', {'aircraft.lever_arm_m': ARM})
     assert sets.filter.lever_arm_m == tuple(ARM) and sets.ldv.origin_m == tuple(ARM)
     for name in ('alignment_filter_node', 'ldv_node', 'slave_ins_node'):
         node = make_node(name, '-p', f'aircraft.lever_arm_m:={arm}')
@@ -138,7 +139,7 @@ def test_node_lever_arm_follows_as_with_set(make_node):
     node = make_node('alignment_filter_node', '-p', f'aircraft.lever_arm_m:={arm}',
                      '-p', 'filter.lever_arm_m:=[1.0,2.0,3.0]')
     assert node.sc.filter.lever_arm_m == (1.0, 2.0, 3.0)
-    assert scenario.load('catapult', {'aircraft.lever_arm_m': ARM, 'filter.lever_arm_m': [1.0, 2.0, 3.0]}
+    assert scenario.load('catapult_paper', {'aircraft.lever_arm_m': ARM, 'filter.lever_arm_m': [1.0, 2.0, 3.0]}
                          ).filter.lever_arm_m == (1.0, 2.0, 3.0)
 
 
@@ -154,22 +155,23 @@ def test_node_lever_arm_follows_as_with_set(make_node):
 def test_run_graph_params_resolve_in_every_node_to_the_set_scenario(tmp_path, sets):
     """The params file run_graph writes for `--set` holds only what was given; each node's
     resolution of it is the --set scenario on the node's keys."""
-    given = scenario.given_data('catapult', sets)
+    given = scenario.given_data('catapult_paper', sets)
     sc = scenario.resolve(given)
     path = tmp_path / 'params.yaml'
     path.write_text(params_yaml(given, sc))
     on_file = params.params_file_given(path, 'any_node')
     assert 'filter.lever_arm_m' not in on_file or 'filter.lever_arm_m' in sets
-    want = _flat(scenario.load('catapult', sets))
+    want = _flat(scenario.load('catapult_paper', sets))
     for name, scope in params.NODE_SCOPES.items():
         node_sc = params.node_scenario(on_file, scope)
         have = {k: v for k, v in _flat(node_sc).items() if scope.covers(k)}
         assert have == {k: v for k, v in want.items() if scope.covers(k)}, name
 
 
-def test_default_params_file_is_the_catapult_scenario_as_given():
-    on_disk = params.params_file_given(GRAPH_YAML, 'alignment_filter_node')
-    given = scenario.given_data('catapult')
+@pytest.mark.parametrize('path, name', [(GRAPH_YAML, 'catapult'), (PAPER_YAML, 'catapult_paper')])
+def test_params_files_are_their_scenarios_as_given(path, name):
+    on_disk = params.params_file_given(path, 'alignment_filter_node')
+    given = scenario.given_data(name)
     assert on_disk == params.given_parameters(given, scenario.resolve(given))
     assert 'filter.lever_arm_m' not in on_disk and 'aircraft.lever_arm_m' in on_disk
 
@@ -178,7 +180,7 @@ def test_a_node_checks_only_what_its_keys_allow():
     """seed001_13 matches the Doppler radar: the whole scenario needs doppler.enabled, the
     filter node (which reads no doppler section) does not."""
     with pytest.raises(ConfigError, match='doppler.enabled'):
-        scenario.load('catapult', {'filter.model': 'seed001_13'})
+        scenario.load('catapult_paper', {'filter.model': 'seed001_13'})
     sc = params.node_scenario({'filter.model': 'seed001_13'}, params.NODE_SCOPES['alignment_filter_node'])
     assert sc.filter.model == 'seed001_13'
 

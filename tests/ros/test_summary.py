@@ -5,6 +5,7 @@ outputs reached. A small bag written here: truth on deck 1.0..2.0 s, outputs 1.0
 10 Hz (the estimate is truth + 1 mrad on each axis, sigma 2 mrad)."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -38,9 +39,11 @@ def bag(tmp_path_factory) -> Path:
     return write_bag(tmp_path_factory.mktemp('s') / 'bag', [TRUTH] * 11, [[x + 1e-3 for x in TRUTH]] * 21)
 
 
-def write_bag(path: Path, truths: list, estimates: list) -> Path:
-    """Truth and estimates (with a state) at 10 Hz from 1.0 s."""
+def write_bag(path: Path, truths: list, estimates: list, more=None) -> Path:
+    """Truth and estimates (with a state) at 10 Hz from 1.0 s; more(writer): anything else."""
     with BagWriter(path) as w:
+        if more is not None:
+            more(w)
         w.add_topic('/truth/misalignment', 'geometry_msgs/msg/Vector3Stamped')
         w.add_topic('/alignment/misalignment', 'geometry_msgs/msg/Vector3Stamped')
         w.add_topic('/alignment/state', 'std_msgs/msg/Float64MultiArray')
@@ -138,3 +141,65 @@ def test_a_moving_truth_is_scored_at_the_estimates_time_of_validity(tmp_path):
     assert told['misalignment_error_rad'] == pytest.approx([0.0, 0.0, 0.0], abs=1e-12)
     untold = summary.summarise(path, path, 1.0, 1.0, 1.0)
     assert untold['misalignment_error_rad'] == pytest.approx([-2e-3, 2e-3, -4e-3], abs=1e-12)
+
+
+def _diagnostics(t_ns: int, values: dict) -> bytes:
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    d = DiagnosticArray()
+    d.header.stamp.sec, d.header.stamp.nanosec = t_ns // NS, t_ns % NS
+    d.status = [DiagnosticStatus(name='alignment_filter',
+                                 values=[KeyValue(key=k, value=str(v)) for k, v in values.items()])]
+    return serialize_message(d)
+
+
+@pytest.mark.parametrize('diagnosed', [True, False])
+def test_a_held_estimate_is_scored_where_its_last_match_was(tmp_path, diagnosed):
+    """A beam that loses its reflector before the release: the last match (valid at 1.5 s) is
+    first published at 1.6 s, then repeated bit for bit while the relative attitude (a ramp of
+    1 mrad per 0.1 s) moves on. The filter's /diagnostics say where the held estimate is valid:
+    error zero there. Without that report (an older bag) its first output's stamp stands in
+    (1.6 s: one step of the ramp off)."""
+    ramp = [(1e-3 * k, -1e-3 * k, 2e-3 * k) for k in range(11)]
+    def report(w):              # the filter's 1 Hz report after the last match, then a later one
+        w.add_topic('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray')
+        for t in (int(1.8 * NS), int(2.0 * NS)):
+            w.write('/diagnostics', _diagnostics(t, {'misalignment_valid_ns': int(1.5 * NS)}), t)
+    estimates = [ramp[max(k - 1, 0)] if k < 6 else ramp[5] for k in range(11)]
+    path = write_bag(tmp_path / 'bag', ramp, estimates, report if diagnosed else None)
+    s = summary.summarise(path, path, 1.0, 1.0, 1.0)
+    assert s['estimate_stamp_s'] == pytest.approx(2.0)
+    assert s['misalignment_valid_s'] == pytest.approx(1.5 if diagnosed else 1.6)
+    want = [0.0, 0.0, 0.0] if diagnosed else [-1e-3, 1e-3, -2e-3]
+    assert s['misalignment_error_rad'] == pytest.approx(want, abs=1e-12)
+    assert 'valid at t = ' in summary.table(s)
+
+
+def test_the_slave_attitude_is_scored_at_its_own_stamp(tmp_path):
+    """/alignment/attitude against /truth/aircraft/odom at the same stamp. The estimate is the
+    truth turned by theta = (0, 0, 1 mrad) (C_est = C_true (I + [theta x]) with a level truth);
+    from C_est = (I - [phi x]) C_true, phi = -theta; the 1-sigma is the covariance's diagonal."""
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    from nav_msgs.msg import Odometry
+
+    def more(w):
+        w.add_topic('/alignment/attitude', 'geometry_msgs/msg/PoseWithCovarianceStamped')
+        w.add_topic('/truth/aircraft/odom', 'nav_msgs/msg/Odometry')
+        for k in range(11):
+            t = NS + k * NS // 10
+            o = Odometry()
+            o.header.stamp.sec, o.header.stamp.nanosec = t // NS, t % NS
+            o.pose.pose.orientation.w = 1.0
+            w.write('/truth/aircraft/odom', serialize_message(o), t)
+            a = PoseWithCovarianceStamped()
+            a.header.stamp = o.header.stamp
+            a.pose.pose.orientation.z, a.pose.pose.orientation.w = math.sin(5e-4), math.cos(5e-4)
+            cov = [0.0] * 36
+            cov[21], cov[28], cov[35] = 1e-8, 4e-8, 9e-8
+            a.pose.covariance = cov
+            w.write('/alignment/attitude', serialize_message(a), t)
+    path = write_bag(tmp_path / 'bag', [TRUTH] * 11, [TRUTH] * 11, more)
+    s = summary.summarise(path, path, 1.0, 1.0, 1.0)
+    assert s['attitude_stamp_s'] == pytest.approx(2.0)
+    assert s['attitude_error_rad'] == pytest.approx([0.0, 0.0, -1e-3], abs=1e-12)
+    assert s['attitude_sigma_rad'] == pytest.approx([1e-4, 2e-4, 3e-4])
+    assert 'slave attitude error' in summary.table(s)

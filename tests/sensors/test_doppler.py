@@ -90,9 +90,9 @@ def test_rate_latency_and_batch_inputs():
     out = DopplerStage(cfg, 3, 100.0, int(t[0])).run_batch(t, v)
     # measured every 100 ms over 2 s, stamped 50 ms later; the last one (2.05 s) never arrives
     assert [s.t_ns for s in out] == [int(t[0]) + k * 100_000_000 + 50_000_000 for k in range(20)]
-    sc = scenario.load('catapult', {'duration_s': 1.0})
+    sc = scenario.load('catapult_paper', {'duration_s': 1.0})
     assert pipeline.simulate(sc).doppler is None
-    sc = scenario.load('catapult', {'duration_s': 1.0, 'doppler.enabled': True})
+    sc = scenario.load('catapult_paper', {'duration_s': 1.0, 'doppler.enabled': True})
     inp = pipeline.simulate(sc)
     assert [d.t_ns for d in inp.doppler] == [sc.t0_ns + k * 100_000_000 for k in range(11)]
     # on the deck the radar sees the ship's ~10 kn plus the deck motion at the aircraft

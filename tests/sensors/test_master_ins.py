@@ -121,7 +121,7 @@ def test_exact_discretisation_composes():
 
 
 def test_published_solution_carries_the_error_state():
-    sc = scenario.load('catapult', {'duration_s': 2.0, 'master.model': 'schuler', 'master.arw_dpsh': 0.001,
+    sc = scenario.load('catapult_paper', {'duration_s': 2.0, 'master.model': 'schuler', 'master.arw_dpsh': 0.001,
                                     'master.vrw_ugpshz': 5.0})
     ships = ShipBatch.of(pipeline.ship_samples(sc))
     m = MasterInsModel(sc.master, sc.seed, sc.ship.lat_deg * DEG)
@@ -136,7 +136,7 @@ def test_published_solution_carries_the_error_state():
 
 
 def test_rate_and_latency_stamps_and_step_equals_batch():
-    sc = scenario.load('catapult', {'duration_s': 1.0, 'master.model': 'schuler', 'master.rate_hz': 50.0,
+    sc = scenario.load('catapult_paper', {'duration_s': 1.0, 'master.model': 'schuler', 'master.rate_hz': 50.0,
                                     'master.latency_s': 0.025})
     ships = ShipBatch.of(pipeline.ship_samples(sc))
     lat = sc.ship.lat_deg * DEG
@@ -155,7 +155,7 @@ def test_rate_and_latency_stamps_and_step_equals_batch():
 
 
 def test_default_master_is_todays_constant_model():
-    sc = scenario.load('catapult', {'duration_s': 1.0})
+    sc = scenario.load('catapult_paper', {'duration_s': 1.0})
     assert sc.master.model == 'constant' and sc.master.rate_hz == 0.0 and sc.master.latency_s == 0.0
     ships = ShipBatch.of(pipeline.ship_samples(sc))
     outs = MasterInsStage(sc.master, sc.seed, sc.ship.lat_deg * DEG, sc.rate_hz, sc.t0_ns).run_batch(ships)

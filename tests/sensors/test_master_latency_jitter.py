@@ -28,7 +28,7 @@ def _stages(sc):
 
 
 def test_jittered_delays_are_uniform_monotone_and_the_same_stepped_or_batched():
-    sc = scenario.load('deck', {'duration_s': 60.0, **REAL}, seed=5)
+    sc = scenario.load('deck_paper', {'duration_s': 60.0, **REAL}, seed=5)
     ships, batch, stepped = _stages(sc)
     stamps = np.array([o.t_ns for o in batch], dtype=np.int64)
     assert [o.t_ns for o in stepped] == list(stamps)
@@ -40,7 +40,7 @@ def test_jittered_delays_are_uniform_monotone_and_the_same_stepped_or_batched():
     assert stats.kstest(delay / 0.012, 'uniform').pvalue > 1e-4
     assert abs(delay.mean() - 0.006) < 4.0 * 0.012 / np.sqrt(12.0 * len(delay))
     # the jitter draws from a stream of its own: the solution itself is unchanged
-    plain = _stages(scenario.load('deck', {'duration_s': 60.0, **REAL, 'master.latency_jitter_s': 0.0}, seed=5))[1]
+    plain = _stages(scenario.load('deck_paper', {'duration_s': 60.0, **REAL, 'master.latency_jitter_s': 0.0}, seed=5))[1]
     for a, b in zip(batch, plain):
         np.testing.assert_array_equal(a.sample.v_b, b.sample.v_b)
         np.testing.assert_array_equal(a.phi, b.phi)
@@ -50,5 +50,5 @@ def test_jittered_delays_are_uniform_monotone_and_the_same_stepped_or_batched():
 
 def test_a_jitter_as_long_as_the_sample_interval_is_refused():
     with pytest.raises(ConfigError, match='latency_jitter_s'):
-        scenario.load('deck', {**REAL, 'master.latency_jitter_s': 0.02})     # 50 Hz: 20 ms apart
-    scenario.load('deck', {**REAL, 'master.latency_jitter_s': 0.019})
+        scenario.load('deck_paper', {**REAL, 'master.latency_jitter_s': 0.02})     # 50 Hz: 20 ms apart
+    scenario.load('deck_paper', {**REAL, 'master.latency_jitter_s': 0.019})

@@ -12,7 +12,7 @@ from alignment_core.validation import ConfigError
 
 
 def load(**sets):
-    return scenario.load('catapult', {k.replace('__', '.'): v for k, v in sets.items()})
+    return scenario.load('catapult_paper', {k.replace('__', '.'): v for k, v in sets.items()})
 
 
 @pytest.mark.parametrize('name', sorted(IMU_PRESETS))

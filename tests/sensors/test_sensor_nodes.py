@@ -22,7 +22,7 @@ from alignment_core.units import DEG
 from alignment_ros import convert, qos, topics
 
 ROOT = Path(__file__).resolve().parents[2]
-PARAMS = ROOT / 'config/params/graph.yaml'
+PARAMS = ROOT / 'config/params/catapult_paper.yaml'
 MASTER_SETS = {'master.model': 'schuler', 'master.rate_hz': 50.0, 'master.latency_s': 0.025,
                'master.arw_dpsh': 0.001, 'master.vrw_ugpshz': 5.0}
 LDV_SETS = {'ldv.rate_hz': 25.0, 'ldv.latency_s': 0.013, 'ldv.dropout_rate_hz': 2.0, 'ldv.dropout_mean_s': 0.05,
@@ -31,7 +31,7 @@ LDV_SETS = {'ldv.rate_hz': 25.0, 'ldv.latency_s': 0.013, 'ldv.dropout_rate_hz': 
 
 def test_master_node_schuler_rate_latency(ros):
     node, start = ros
-    sc = scenario.load('catapult', MASTER_SETS)
+    sc = scenario.load('catapult_paper', MASTER_SETS)
     odom: list[Odometry] = []
     err: list[Vector3Stamped] = []
     pub = node.create_publisher(Odometry, topics.SHIP_ODOM, qos.STREAM)
@@ -61,8 +61,8 @@ def test_master_node_schuler_rate_latency(ros):
 
 def test_ldv_node_timing_dropouts_and_doppler(ros):
     node, start = ros
-    sc = scenario.load('catapult', LDV_SETS)
-    inp = pipeline.simulate(scenario.load('catapult', {'duration_s': 2.0}))
+    sc = scenario.load('catapult_paper', LDV_SETS)
+    inp = pipeline.simulate(scenario.load('catapult_paper', {'duration_s': 2.0}))
     ldv: list[TwistWithCovarianceStamped] = []
     dop: list[TwistWithCovarianceStamped] = []
     ps = node.create_publisher(Odometry, topics.SHIP_ODOM, qos.STREAM)
@@ -107,7 +107,7 @@ def test_master_node_jitter_stamps_as_the_stage(ros):
     stage's own draw: the same stamps, off the ship's sample grid, in order."""
     sets = {**MASTER_SETS, 'master.latency_jitter_s': 0.008}
     node, start = ros
-    sc = scenario.load('catapult', sets)
+    sc = scenario.load('catapult_paper', sets)
     odom: list[Odometry] = []
     pub = node.create_publisher(Odometry, topics.SHIP_ODOM, qos.STREAM)
     node.create_subscription(Odometry, topics.MASTER_ODOM, odom.append, qos.STREAM)

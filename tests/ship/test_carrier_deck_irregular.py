@@ -1,4 +1,4 @@
-"""The realistic carrier deck's ship (`carrier_deck`: spectral sea state 5 from the port quarter,
+"""The realistic carrier deck's ship (`deck`: spectral sea state 5 from the port quarter,
 20 kn, MMG course keeping) rolls irregularly at the carrier's roll period, unlike the papers'
 one sinusoid per axis.
 
@@ -17,8 +17,8 @@ DURATION_S = 300.0
 
 
 @pytest.mark.parametrize('seed', [1, 2])
-def test_carrier_deck_rolls_irregularly_at_its_roll_period(seed):
-    sc = scenario.load('carrier_deck', seed=seed)
+def test_deck_rolls_irregularly_at_its_roll_period(seed):
+    sc = scenario.load('deck', seed=seed)
     assert sc.ship.mode == 'spectral' and sc.ship.course_keeping == 'mmg'
     t = np.arange(0.0, DURATION_S, 0.01)
     roll = make_motion(sc.ship, sc.seed).batch(t)['euler'][:, 0]

@@ -29,18 +29,18 @@ from alignment_core.validation import ConfigError
 ])
 def test_invalid_spectral_configs_fail_clearly(overrides, message):
     with pytest.raises(ConfigError, match=message):
-        scenario.load('deck', {'ship.mode': 'spectral', **overrides})
+        scenario.load('deck_paper', {'ship.mode': 'spectral', **overrides})
 
 
 def test_dispatch_by_mode():
-    sc = scenario.load('deck')
+    sc = scenario.load('deck_paper')
     assert sc.ship.mode == 'paper' and isinstance(pipeline.ship_source(sc), PaperShipMotion)
-    sc = scenario.load('deck', {'ship.mode': 'spectral', 'ship.sea_state': 8})
+    sc = scenario.load('deck_paper', {'ship.mode': 'spectral', 'ship.sea_state': 8})
     src = pipeline.ship_source(sc)
     assert isinstance(src, SpectralShipMotion) and src.sea.hs_m == 11.5 and src.sea.tp_s == 16.4
     # beyond the WMO codes neither mode has a sea
     with pytest.raises(ConfigError, match='sea_state'):
-        scenario.load('deck', {'ship.sea_state': 10})
+        scenario.load('deck_paper', {'ship.sea_state': 10})
 
 
 def _sinusoid_fit(t, y, period):
@@ -63,7 +63,7 @@ def test_paper_mode_is_seed_002s_sinusoids():
     v_course = speed * np.array([np.sin(np.radians(30.0)), np.cos(np.radians(30.0))])
     phases = []
     for seed in (7, 8):
-        sc = scenario.load('deck', {'ship.sea_state': 5, 'seed': seed})
+        sc = scenario.load('deck_paper', {'ship.sea_state': 5, 'seed': seed})
         assert sc.ship.mode == 'paper' and sc.ship.heave and sc.ship.motion_scale == 1.0
         assert (sc.ship.heading_deg, sc.ship.speed_kn) == (30.0, 10.0)
         s = make_motion(sc.ship, sc.seed).samples(t, 0, 250_000_000)
@@ -105,12 +105,12 @@ def test_straight_course_position_integrates_velocity(heading_deg):
 def test_monte_carlo_sea_draw_in_the_ship_model():
     """`sea_draw` draws Hs and Tp within the sea state's bin from their own stream: the wave
     phases (stream 'ship_waves') stay those of the seed."""
-    cfgs = [scenario.load('deck', {'ship.mode': 'spectral', 'ship.sea_state': 5, 'ship.sea_draw': True,
+    cfgs = [scenario.load('deck_paper', {'ship.mode': 'spectral', 'ship.sea_state': 5, 'ship.sea_draw': True,
                                    'seed': s}).ship for s in range(1, 9)]
     seas = [SpectralShipMotion(c, s).sea for s, c in enumerate(cfgs, start=1)]
     assert all(2.5 <= x.hs_m <= 4.0 and 8.3 <= x.tp_s <= 15.5 for x in seas)
     assert len({x.hs_m for x in seas}) == len(seas)
-    fixed = SpectralShipMotion(scenario.load('deck', {'ship.mode': 'spectral', 'ship.sea_state': 5,
+    fixed = SpectralShipMotion(scenario.load('deck_paper', {'ship.mode': 'spectral', 'ship.sea_state': 5,
                                                       'seed': 3}).ship, 3)
     assert fixed.sea.hs_m == 3.25 and fixed.sea.tp_s == 9.7
     drawn = SpectralShipMotion(cfgs[2], 3)

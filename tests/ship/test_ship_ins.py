@@ -20,7 +20,7 @@ SPECTRAL_SS6 = {'ship.mode': 'spectral', 'ship.sea_state': 6, 'ship.speed_kn': 2
 @pytest.mark.parametrize('lever_arm', [[90.0, -40.0, 15.0], [0.0, 0.0, 0.0]],
                          ids=['aircraft-100m-from-master', 'master-point'])
 def test_strapdown_reproduces_spectral_ship_truth(lever_arm):
-    sc = scenario.load('deck', {**NOISE_OFF, **SPECTRAL_SS6, 'aircraft.lever_arm_m': lever_arm,
+    sc = scenario.load('deck_paper', {**NOISE_OFF, **SPECTRAL_SS6, 'aircraft.lever_arm_m': lever_arm,
                                 'duration_s': 600.0})
     att, vel, truth = strapdown_errors(sc)
     assert len(att) == 60000 and np.all(truth['on_deck'])

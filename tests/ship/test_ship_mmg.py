@@ -28,7 +28,7 @@ def test_strapdown_reproduces_the_truth_through_a_turn_at_sea_state_6():
     """Noise-free slave IMU 100 m from the master, 10 min: 20 kn on 030, a 90 deg turn to 120
     ordered at 60 s (the rudder hard over), 25 kn of wind, bow-quartering seas turning to
     the beam; strapdown from the true initial state within 1e-6 rad and 1e-3 m/s."""
-    sc = scenario.load('deck', {**NOISE_OFF, **TURN_SS6, 'aircraft.lever_arm_m': [90.0, -40.0, 15.0],
+    sc = scenario.load('deck_paper', {**NOISE_OFF, **TURN_SS6, 'aircraft.lever_arm_m': [90.0, -40.0, 15.0],
                                 'duration_s': 600.0})
     att, vel, truth = strapdown_errors(sc)
     assert len(att) == 60000 and np.all(truth['on_deck'])
@@ -41,7 +41,7 @@ def test_strapdown_reproduces_the_truth_through_a_turn_at_sea_state_6():
 
 def test_strapdown_reproduces_the_paper_ship_on_the_mmg_track():
     """Paper mode: the seed's sinusoids about the MMG track driven by the box-ship forces."""
-    sc = scenario.load('deck', {**NOISE_OFF, 'ship.sea_state': 6, 'ship.course_keeping': 'mmg',
+    sc = scenario.load('deck_paper', {**NOISE_OFF, 'ship.sea_state': 6, 'ship.course_keeping': 'mmg',
                                 'ship.turn_at_s': 20.0, 'ship.turn_to_deg': 60.0,
                                 'aircraft.lever_arm_m': [90.0, -40.0, 15.0], 'duration_s': 120.0})
     att, vel, _ = strapdown_errors(sc)
@@ -55,7 +55,7 @@ def test_sample_by_sample_equals_the_batch(mode):
     small matrix products, as in 'straight')."""
     ov = {**TURN_SS6, 'ship.mode': mode, 'duration_s': 40.0, 'ship.n_frequencies': 30,
           'ship.n_directions': 5}
-    sc = scenario.load('deck', ov)
+    sc = scenario.load('deck_paper', ov)
     taus = np.arange(sc.n_samples) * sc.dt_ns / 1e9
     batch = pipeline.ship_source(sc).samples(taus, sc.t0_ns, sc.dt_ns)
     single = pipeline.ship_source(sc)
@@ -79,7 +79,7 @@ def test_wind_heels_the_ship_by_the_heeling_arm():
     ov = {'ship.mode': 'spectral', 'ship.sea_state': 0, 'ship.course_keeping': 'mmg',
           'ship.heading_deg': 0.0, 'ship.wind_speed_kn': 40.0, 'ship.wind_from_deg': 90.0,
           'ship.speed_kn': 15.0}
-    sc = scenario.load('deck', ov)
+    sc = scenario.load('deck_paper', ov)
     lf = pipeline.ship_source(sc).track.kinematics(np.array([0.0, 900.0]))
     assert np.degrees(lf['psi']) == pytest.approx([0.0, 0.0], abs=0.2)
     vw, u = 40.0 * 0.514444, np.linalg.norm(lf['v_n'][1])
@@ -107,7 +107,7 @@ def test_wind_heels_the_ship_by_the_heeling_arm():
 def test_bad_values_are_rejected_naming_the_key(key, value, message):
     ov = {'ship.course_keeping': 'mmg', 'ship.turn_at_s': 10.0, key: value}
     with pytest.raises(ConfigError, match=message):
-        scenario.load('deck', ov)
+        scenario.load('deck_paper', ov)
 
 
 def test_ship_motion_node_refuses_a_bad_autopilot_gain():
@@ -118,7 +118,7 @@ def test_ship_motion_node_refuses_a_bad_autopilot_gain():
     try:
         env = dict(os.environ, ROS_DOMAIN_ID=str(dom))
         p = subprocess.run([str(ROOT / 'scripts/start_node.sh'), 'ship_motion_node', '--params-file',
-                            str(ROOT / 'config/params/graph.yaml'), '--ros-args', '-p',
+                            str(ROOT / 'config/params/catapult_paper.yaml'), '--ros-args', '-p',
                             'ship.autopilot_kp:=-1.0'], env=env, capture_output=True, text=True,
                            timeout=60)
     finally:

@@ -145,7 +145,7 @@ def test_same_seed_same_series_other_seed_differs():
 
 def test_sample_by_sample_equals_batch():
     """The ship node asks for one sample at a time; the batch pipeline for all of them."""
-    sc = scenario.load('deck', {'ship.mode': 'spectral', 'ship.sea_state': 6, 'duration_s': 30.0,
+    sc = scenario.load('deck_paper', {'ship.mode': 'spectral', 'ship.sea_state': 6, 'duration_s': 30.0,
                                 'ship.wave_heading_deg': 120.0})
     batch = pipeline.ship_samples(sc)
     src = pipeline.ship_source(sc)

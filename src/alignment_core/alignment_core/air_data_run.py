@@ -74,7 +74,7 @@ def _aligned_ins(sc: Scenario, inp: pipeline.Inputs) -> list[InsSample]:
             continue
         c = quat_to_dcm_batch(np.asarray(e.q_nb, dtype=float))
         lat, _, h = plane.to_geodetic(np.asarray(e.p_w, dtype=float))
-        out.append(InsSample((e.t_ns - sc.t0_ns) * 1e-9, np.asarray(e.q_nb, dtype=float), c @ e.v_b, float(h),
+        out.append(InsSample((e.navigation_ns - sc.t0_ns) * 1e-9, np.asarray(e.q_nb, dtype=float), c @ e.v_b, float(h),
                              float(lat), e.pose_cov[3:6, 3:6], c @ e.twist_cov[:3, :3] @ c.T, float(e.pose_cov[2, 2])))
     return out
 

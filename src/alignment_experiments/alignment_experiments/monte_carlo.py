@@ -113,7 +113,7 @@ def run_one(spec: RunSpec) -> RunOutcome:
     t0 = sc.t0_ns
     t_ns = np.array([e.t_ns for e in est], dtype=np.int64)
     if spec.quantity == 'attitude':
-        k_truth = truth_indices(inp.ships.t_ns, t_ns)
+        k_truth = truth_indices(inp.ships.t_ns, np.array([e.navigation_ns for e in est], dtype=np.int64))
         err, sig = attitude_errors(est, inp.truth['q_nb'][k_truth])
     elif spec.quantity == 'misalignment':
         err, sig = misalignment_errors(est, inp.ships.t_ns, true_misalignment(inp))

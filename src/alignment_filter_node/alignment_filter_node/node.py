@@ -209,6 +209,7 @@ class AlignmentFilterNode(node_util.CountingNode):
             'flags': ' '.join(flags), 'silent': ' '.join(f[:-len('_silent')] for f in flags if f.endswith('_silent')),
             'waiting': ' '.join(self.inputs.waiting_for()), 'held': str(
                 e is not None and 'held' in e.flags).lower(),
+            'misalignment_valid_ns': e.validity_ns if e is not None else '',
             **{k: f'{v:.4g}' if isinstance(v, float) else v for k, v in d.consistency.items()},
             **{k: f'{v:.4g}' if isinstance(v, float) else v for k, v in d.whiteness.items()},
             'relative_velocity': d.relative_velocity, 'ldv_ignored': c.ldv_ignored,

@@ -230,7 +230,7 @@ def estimate_to_msgs(e: Estimate, labels: tuple[str, ...], p_w
     mis.header.frame_id = topics.FRAME_AIRCRAFT
     _v3(mis.vector, e.misalignment)
     att = PoseWithCovarianceStamped()
-    att.header.stamp = stamp(e.t_ns)
+    att.header.stamp = stamp(e.navigation_ns)      # the slave solution's own time (its newest IMU sample)
     att.header.frame_id = topics.FRAME_WORLD
     _v3(att.pose.pose.position, p_w)
     _quat(att.pose.pose.orientation, e.q_nb)
@@ -274,12 +274,12 @@ def frame_mismatch(m, frame: str, child: str | None = None) -> str:
 
 
 def estimate_to_odometry(e: Estimate) -> Odometry | None:
-    """/alignment/odom: the slave INS solution after the filter's corrections (REP-105: pose in
-    'world', twist in the child frame 'aircraft'); covariances as the estimate gives them (a -1
+    """/alignment/odom: the slave INS solution after the filter's corrections, stamped with its own
+    time (REP-105: pose in 'world', twist in the child frame 'aircraft'); covariances as the estimate gives them (a -1
     diagonal: not estimated). None if the estimate carries no odometry."""
     if e.p_w is None or e.v_b is None or e.w_b is None or e.pose_cov is None or e.twist_cov is None:
         return None
-    m = odometry(e.t_ns, topics.FRAME_WORLD, topics.FRAME_AIRCRAFT, e.p_w, e.q_nb, e.v_b, e.w_b)
+    m = odometry(e.navigation_ns, topics.FRAME_WORLD, topics.FRAME_AIRCRAFT, e.p_w, e.q_nb, e.v_b, e.w_b)
     m.pose.covariance = [float(x) for x in np.asarray(e.pose_cov, dtype=float).ravel()]
     m.twist.covariance = [float(x) for x in np.asarray(e.twist_cov, dtype=float).ravel()]
     return m

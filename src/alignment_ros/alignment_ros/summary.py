@@ -8,6 +8,11 @@ the innovation whiteness is the filter's last report, its run-out's included). A
 whether the run is complete (``complete``, ``problems``): a lost message, a foreign one, a run
 cut short or anything the launcher saw go wrong makes it incomplete (and the exit non-zero).
 
+The slave INS's own attitude is scored at the same instant (``attitude_*``: the filter's
+/alignment/attitude against /truth/aircraft/odom at its stamp, nav-frame rotation vector, its
+1-sigma from the published covariance): for a launch from the gear it is the quantity that
+matters, what the aircraft carries away (the relative attitude swings by a degree on the struts).
+
 Without truth (a replay of a real recording: no /truth/misalignment in its input), the summary
 gives the estimate and its 1-sigma at the filter's last output, truth and error None, and
 ``truth: false`` (the key is absent otherwise); the table says so.
@@ -19,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 from rclpy.serialization import deserialize_message
+from scipy.spatial.transform import Rotation
 
 from alignment_core.units import ARCMIN
 
@@ -28,7 +34,7 @@ from .convert import to_ns
 from .topics import msg_class
 
 SCORE_KEYS = ('misalignment_truth_rad', 'misalignment_estimate_rad', 'misalignment_sigma_rad',
-              'misalignment_error_rad', 'scored_at_s', 'estimate_stamp_s')
+              'misalignment_error_rad', 'scored_at_s', 'estimate_stamp_s', 'misalignment_valid_s')
 
 
 def _read(bag: Path, names: tuple[str, ...]) -> dict[str, list]:
@@ -128,9 +134,11 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     est = {k: v[:n_kept] for k, v in est.items()}
     problems = list(problems or [])
     air = air_data_summary.score(estimate_bag)
-    score = (_score(truth_bag, est, problems, optional=air is not None, until_ns=until_ns,
+    score = (_score(truth_bag, estimate_bag, est, problems, optional=air is not None, until_ns=until_ns,
                     latency_ns=round(latency_s * 1e9)) if truth
              else _estimate_only(est, problems))
+    if truth and score.get('scored_at_s') is not None:
+        score.update(_attitude_score(truth_bag, estimate_bag, round(score['scored_at_s'] * 1e9)))
     own = topic_counts(estimate_bag)
     counts = {**topic_counts(truth_bag), **own} if Path(truth_bag) != Path(estimate_bag) else own
     pub = published or {}
@@ -171,11 +179,28 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     }
 
 
-def _score(truth_bag: Path, est: dict[str, np.ndarray], problems: list[str], optional: bool = False,
-           until_ns: int | None = None, latency_ns: int = 0) -> dict:
+def _held_validity(bag: Path, since_ns: int, fallback_ns: int) -> int:
+    """The time of validity of an estimate held since the output at since_ns: the filter's first
+    /diagnostics from then on says it (`misalignment_valid_ns`, its last match's); fallback_ns if
+    none does (an older bag) or the one found is later (a new match)."""
+    for m in _read(bag, (topics.DIAGNOSTICS,))[topics.DIAGNOSTICS]:
+        if to_ns(m.header.stamp) < since_ns:
+            continue
+        for st in m.status:
+            if st.name == 'alignment_filter':
+                v = {kv.key: kv.value for kv in st.values}.get('misalignment_valid_ns', '')
+                if v.lstrip('-').isdigit() and int(v) <= since_ns:
+                    return int(v)
+                return fallback_ns
+    return fallback_ns
+
+
+def _score(truth_bag: Path, estimate_bag: Path, est: dict[str, np.ndarray], problems: list[str],
+           optional: bool = False, until_ns: int | None = None, latency_ns: int = 0) -> dict:
     """The last estimate of deck matching against the truth at its time of validity (its stamp
     less the master latency the filter is told; the relative attitude moves on the gear and a
-    flexing deck); None and a problem if unavailable (`optional`: a run with air data and no
+    flexing deck); an estimate held since an earlier output (the same vector: no match since, e.g.
+    a beam that lost its reflector) is valid where its last match was; None and a problem if unavailable (`optional`: a run with air data and no
     deck phase has no misalignment to score)."""
     try:
         t_truth, truth = truth_from_bag(truth_bag, until_ns)
@@ -188,9 +213,16 @@ def _score(truth_bag: Path, est: dict[str, np.ndarray], problems: list[str], opt
     if i < 0:
         problems.append('nothing to score: no filter output before the end of deck matching')
         return dict.fromkeys(SCORE_KEYS)
-    k = min(int(np.searchsorted(t_truth, int(est['t_ns'][i]) - latency_ns)), len(t_truth) - 1)
+    j = i                                      # a held estimate (no match since) repeats bit for bit
+    while j > 0 and np.array_equal(est['misalignment'][j - 1], est['misalignment'][i]):
+        j -= 1
+    t_valid = int(est['t_ns'][j]) - latency_ns
+    if j < i:
+        t_valid = _held_validity(estimate_bag, int(est['t_ns'][j]), t_valid)
+    k = min(int(np.searchsorted(t_truth, t_valid)), len(t_truth) - 1)
     mu = truth[k]
     return {
+        'misalignment_valid_s': t_valid * 1e-9 if j < i else None,     # only for a held estimate
         'misalignment_truth_rad': mu.tolist(),
         'misalignment_estimate_rad': est['misalignment'][i].tolist(),
         'misalignment_sigma_rad': est['sigma'][i].tolist(),
@@ -198,6 +230,30 @@ def _score(truth_bag: Path, est: dict[str, np.ndarray], problems: list[str], opt
         'scored_at_s': t_rel * 1e-9,
         'estimate_stamp_s': int(est['t_ns'][i]) * 1e-9,
     }
+
+
+def _attitude_score(truth_bag: Path, estimate_bag: Path, at_ns: int | None) -> dict:
+    """The slave attitude error at the last /alignment/attitude stamped at or before at_ns against
+    /truth/aircraft/odom at that stamp (C_est = (I - [phi x]) C_true, nav frame ENU, rad) and its
+    1-sigma; {} without the topics or an exact truth stamp (both run on the IMU's clock)."""
+    if at_ns is None:
+        return {}
+    att = [m for m in _read(estimate_bag, (topics.ALIGN_ATTITUDE,))[topics.ALIGN_ATTITUDE]
+           if to_ns(m.header.stamp) <= at_ns]
+    if not att:
+        return {}
+    a = att[-1]
+    t = to_ns(a.header.stamp)
+    truth = [m for m in _read(truth_bag, (topics.TRUTH_AIRCRAFT_ODOM,))[topics.TRUTH_AIRCRAFT_ODOM]
+             if to_ns(m.header.stamp) == t]
+    if not truth:
+        return {}
+    q = truth[-1].pose.pose.orientation
+    o = a.pose.pose.orientation
+    phi = (Rotation.from_quat([q.x, q.y, q.z, q.w]) * Rotation.from_quat([o.x, o.y, o.z, o.w]).inv()).as_rotvec()
+    cov = np.asarray(a.pose.covariance, dtype=float).reshape(6, 6)[3:, 3:]
+    return {'attitude_error_rad': phi.tolist(), 'attitude_sigma_rad': np.sqrt(np.diag(cov)).tolist(),
+            'attitude_stamp_s': t * 1e-9}
 
 
 def _estimate_only(est: dict[str, np.ndarray], problems: list[str]) -> dict:
@@ -227,6 +283,9 @@ def table(s: dict) -> str:
         head = f"misalignment at t = {s['scored_at_s']:.2f} s"
         if abs(s['estimate_stamp_s'] - s['scored_at_s']) > 5e-4:   # the latest output is older
             head += f", estimate of t = {s['estimate_stamp_s']:.2f} s"
+        valid = s.get('misalignment_valid_s')
+        if valid is not None:
+            head += f", valid at t = {valid:.2f} s (its last match; truth there)"
         lines += [head + ' (aircraft FLU axes, arcmin)',
                   f"{'axis':<10}{'truth':>10}{'estimate':>10}{'error':>10}{'1 sigma':>10}"]
         for k, name in enumerate(('x (roll)', 'y (pitch)', 'z (yaw)')):
@@ -234,6 +293,11 @@ def table(s: dict) -> str:
                          f"{(est[k] - mu[k]) / ARCMIN:>10.3f}{sig[k] / ARCMIN:>10.3f}")
     else:
         lines.append('misalignment: nothing to score')
+    if s.get('attitude_error_rad') is not None:
+        err, sig = np.array(s['attitude_error_rad']), np.array(s['attitude_sigma_rad'])
+        lines.append(f"slave attitude error at t = {s['attitude_stamp_s']:.2f} s (nav frame, arcmin): "
+                     + ', '.join(f"{n} {err[k] / ARCMIN:.3f} (1 sigma {sig[k] / ARCMIN:.3f})"
+                                 for k, n in enumerate(('east', 'north', 'up'))))
     if 'innovation_whiteness' in s:
         lines.append(whiteness_line(s['innovation_whiteness']))
     if s.get('air_data'):

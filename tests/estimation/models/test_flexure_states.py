@@ -63,7 +63,7 @@ def test_seed003_21_without_flexure_aligns_a_rigid_mount():
     """The deck scenario (the aircraft rigid on the deck, no flexure in the truth), 60 s: the
     mounting estimate within 3 sigma of the truth on every axis, and the default numbers with
     flexure states are not those without."""
-    sc = scenario.load('deck', overrides={'duration_s': 60.0, 'filter.model': 'seed003_21',
+    sc = scenario.load('deck_paper', overrides={'duration_s': 60.0, 'filter.model': 'seed003_21',
                                           'filter.flexure_states': False})
     inp = pipeline.simulate(sc)
     f = pipeline.align(sc, inp)

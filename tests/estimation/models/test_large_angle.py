@@ -124,7 +124,7 @@ def calm_sea_large_yaw():
 
 @pytest.mark.parametrize('algorithm', ['ekf', 'ukf', 'ckf'])
 def test_engine_converges_from_a_10_degree_yaw_error(calm_sea_large_yaw, algorithm):
-    sc = scenario.load('catapult', {**calm_sea_large_yaw, 'filter.algorithm': algorithm})
+    sc = scenario.load('catapult_paper', {**calm_sea_large_yaw, 'filter.algorithm': algorithm})
     res = pipeline.run(sc)
     t_rel = max(t.t_ns for t in res.truth if t.on_deck)
     before = [e for e in res.estimates if e.t_ns <= sc.t0_ns + 5.9e9][-1]

@@ -15,7 +15,7 @@ REAL = {'duration_s': 60.0, 'master.model': 'schuler', 'master.rate_hz': 50.0, '
 
 
 def _run(extra: dict, seed: int):
-    sc = scenario.load('deck', {**REAL, **extra}, seed=seed)
+    sc = scenario.load('deck_paper', {**REAL, **extra}, seed=seed)
     res = pipeline.run(sc, keep_truth=False)
     i = res.filter.labels.index('dt_master')
     return sc, res, res.estimates[-1], i

@@ -118,12 +118,12 @@ def test_yaw_matching_keeps_the_velocity_rows_and_the_heading_row():
 ])
 def test_invalid_option_combinations_are_refused(overrides, message):
     with pytest.raises(ConfigError, match=message):
-        scenario.load('deck', overrides)
+        scenario.load('deck_paper', overrides)
 
 
 def _deck(extra: dict, seconds: float = 40.0):
     ov = tuple({'duration_s': seconds, **extra}.items())
-    return run_one(RunSpec(0, 'x', 'deck', ov, 3, score_at=seconds - 0.5))
+    return run_one(RunSpec(0, 'x', 'deck_paper', ov, 3, score_at=seconds - 0.5))
 
 
 def test_delay_state_estimates_a_master_latency_the_filter_is_not_told():
@@ -134,7 +134,7 @@ def test_delay_state_estimates_a_master_latency_the_filter_is_not_told():
     late = {'master.latency_s': 0.03}
     blind = _deck(late)
     assert np.max(np.abs(blind.err) / blind.sigma) > 5.0          # the unmodelled lag: a biased filter
-    sc = scenario.load('deck', {'duration_s': 40.0, **late, 'filter.master_delay_state': True}, seed=3)
+    sc = scenario.load('deck_paper', {'duration_s': 40.0, **late, 'filter.master_delay_state': True}, seed=3)
     res = pipeline.run(sc, keep_truth=False)
     i = res.filter.labels.index('dt_master')
     e = res.estimates[-1]

@@ -25,7 +25,7 @@ OV = {'duration_s': 20.0, 'filter.model': 'seed003_24', 'aircraft.flexure.enable
 
 @pytest.mark.parametrize('seed', [5, 6, 7])
 def test_mounting_estimated_within_an_honest_sigma(seed):
-    sc = scenario.load('deck', OV, seed=seed)
+    sc = scenario.load('deck_paper', OV, seed=seed)
     e = pipeline.run(sc, keep_truth=False).estimates[-1]
     err = e.misalignment - np.array(sc.aircraft.misalignment_arcmin) * ARCMIN
     expected = np.sqrt(1.864 * 9.0 * 1.0 / 20.0 + np.array([0.2, 0.2, 0.5]) ** 2) * ARCMIN

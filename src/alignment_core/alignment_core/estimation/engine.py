@@ -336,6 +336,13 @@ class TransferAlignment(ImuEvents, EngineViews):
             else:
                 self._counters.skipped_before_init += 1
 
+    def _valid_at(self, t: int) -> int:
+        """The time the misalignment published at master stamp t refers to: its last master
+        update's validity time (a held match stays valid where it was made), else t less the
+        master latency the filter is told."""
+        t_mu = self._results.t_mu
+        return t - self._master_lat_ns if t_mu is None else t_mu
+
     def _emit(self, t: int, live: LiveSolution) -> None:
         """One output at master stamp t, valid at t less the master latency; after a breakdown,
         the last good one with healthy=False."""
@@ -347,6 +354,6 @@ class TransferAlignment(ImuEvents, EngineViews):
         level, flags = status.with_lag(*status.level_and_flags(self._health, self._monitor), t - live.t_ns,
                                        self._bridge_ns, int(self._cfg.gap_error_s * 1e9))
         e = self._maker.make(t, live, self._results, self._counters.updates, self._matching, level, flags,
-                             t_valid=t - self._master_lat_ns, odometry=odo)
+                             t_valid=self._valid_at(t), odometry=odo)
         e.report = self.report(level, flags)
         self._outputs.append(e)

@@ -77,6 +77,7 @@ class MatchResults:
     anchor: tuple[np.ndarray, np.ndarray] | None = None    # (C_m (3, 3), slave q_nb (4,))
     innovation: np.ndarray | None = None   # the last accepted master update's innovation and its
     innovation_cov: np.ndarray | None = None   # covariance S (innovation whiteness)
+    t_mu: int | None = None                # the validity time of `mu`: its master update's (None: none yet)
 
 
 def _interval_containing(intervals: deque[tuple[int, float, np.ndarray, np.ndarray]], t_v: int
@@ -281,6 +282,7 @@ class Matcher:
         kf.x = x_new
         res.anchor = (ref.c_m, nav.q_nb)
         res.mu, res.mu_sigma = self._model.misalignment(x_new, p, match, nav, res.corr)
+        res.t_mu = t_v
 
     def update_doppler(self, live: LiveSolution, t: int, s: DopplerSample, past: Past) -> None:
         """Match the slave velocity to the radar's, resolved with the slave's own attitude, at the

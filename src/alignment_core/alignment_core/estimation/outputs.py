@@ -49,11 +49,19 @@ class Estimate:
     # the time the misalignment refers to: the stamp less the master latency the filter is told
     # (docs/engine.md, time of validity); None: t_ns (an estimate made before this field)
     t_valid_ns: int | None = None
+    # the time the slave solution (q_nb, attitude_cov, p_w, v_b, w_b) refers to: the newest IMU
+    # sample the INS has integrated when the output is made; None: t_ns
+    t_nav_ns: int | None = None
 
     @property
     def validity_ns(self) -> int:
         """The time of validity of the misalignment (t_ns when not given)."""
         return self.t_ns if self.t_valid_ns is None else self.t_valid_ns
+
+    @property
+    def navigation_ns(self) -> int:
+        """The time the slave solution refers to (t_ns when not given)."""
+        return self.t_ns if self.t_nav_ns is None else self.t_nav_ns
 
 
 @dataclass

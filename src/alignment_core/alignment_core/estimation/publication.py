@@ -130,7 +130,7 @@ class EstimateMaker:
             healthy=level < ERROR, level=level, flags=flags, p_w=p_w, v_b=v_b, w_b=w_b,
             pose_cov=pose_cov, twist_cov=twist_cov,
             state=None if self.held_state is None else self.held_state.copy(),
-            t_valid_ns=t if t_valid is None else t_valid)
+            t_valid_ns=t if t_valid is None else t_valid, t_nav_ns=live.t_ns)
 
 
 class PublishGuard:
@@ -170,7 +170,8 @@ class PublishGuard:
         self.holding = True
         held = self.last_good if self.last_good is not None else prior(e)
         why = e.flags if good else (*e.flags, 'absurd')
-        return dataclasses.replace(held, t_ns=e.t_ns, t_valid_ns=e.t_valid_ns, level=ERROR, healthy=False,
+        return dataclasses.replace(held, t_ns=e.t_ns, t_valid_ns=e.t_valid_ns, t_nav_ns=e.t_nav_ns, level=ERROR,
+                                   healthy=False,
                                    matching=False,
                                    updates=e.updates, flags=tuple(dict.fromkeys((*why, 'held'))), report=e.report)
 
