@@ -24,7 +24,8 @@ def test_default_is_the_15_state_velocity_matching_kf():
     cfg = FilterConfig()
     assert (cfg.model, cfg.algorithm, cfg.lever_arm_treatment, cfg.lever_arm_states) == ('vm15', 'kf', 'compensation',
                                                                                          False)
-    f = TransferAlignment(scenario.load('catapult_paper').filter, pipeline.plane_of(scenario.load('catapult_paper')), 100.0)
+    sc = scenario.load('catapult_paper')
+    f = TransferAlignment(sc.filter, pipeline.plane_of(sc), 100.0)
     assert f.n_states == 15 and f.labels[-3:] == ('phim_E', 'phim_N', 'phim_U') and f.model_name == 'vm15'
 
 
@@ -94,7 +95,8 @@ def test_seed001_doppler_matching_in_flight_estimates_the_radar_errors(seed):
 
 
 def test_butterworth_cutoff_above_nyquist_is_refused_by_the_engine():
-    sc = scenario.load('catapult_paper', {'filter.lever_arm_treatment': 'butterworth', 'filter.butterworth_cutoff_hz': 60.0})
+    sc = scenario.load('catapult_paper', {'filter.lever_arm_treatment': 'butterworth',
+                                          'filter.butterworth_cutoff_hz': 60.0})
     with pytest.raises(ConfigError, match='Nyquist'):
         TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
 

@@ -185,9 +185,9 @@ def test_ldv_later_than_master_defers_the_match(zero_latency):
 def test_outputs_do_not_depend_on_arrival_order_with_latencies_and_rates():
     """Deferred matches (LDV later than the master, master at half the IMU rate, off-grid
     latencies) still depend only on the streams' contents, not on how they interleave."""
-    sc = scenario.load('catapult_paper', {'duration_s': 5.0, 'aircraft.catapult.launch_time_s': 3.0, 'master.rate_hz': 50.0,
-                                    'master.latency_s': 0.013, 'ldv.latency_s': 0.03, 'filter.master_latency_s': 0.013,
-                                    'filter.ldv_latency_s': 0.03})
+    sc = scenario.load('catapult_paper', {'duration_s': 5.0, 'aircraft.catapult.launch_time_s': 3.0,
+                                          'master.rate_hz': 50.0, 'master.latency_s': 0.013, 'ldv.latency_s': 0.03,
+                                          'filter.master_latency_s': 0.013, 'filter.ldv_latency_s': 0.03})
     inp = pipeline.simulate(sc)
     ref = pipeline.align(sc, inp)
     f = feed_in_order(sc, random_interleaving(inp, np.random.default_rng(5)))

@@ -32,7 +32,8 @@ ARM = [60.0, -15.0, 20.0]
 @pytest.fixture
 def make_node():
     """make_node(name, *ros_args): the project's node `name` built with the papers' catapult params
-    file (its lever arm exact: the filter's follows the aircraft's) and ros_args (`-p KEY:=VALUE` ...), as start_node.sh would start it."""
+    file (its lever arm exact: the filter's follows the aircraft's) and ros_args (`-p KEY:=VALUE`
+    ...), as start_node.sh would start it."""
     dom = domain.claim()
     made = []
 

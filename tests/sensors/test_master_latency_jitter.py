@@ -40,7 +40,8 @@ def test_jittered_delays_are_uniform_monotone_and_the_same_stepped_or_batched():
     assert stats.kstest(delay / 0.012, 'uniform').pvalue > 1e-4
     assert abs(delay.mean() - 0.006) < 4.0 * 0.012 / np.sqrt(12.0 * len(delay))
     # the jitter draws from a stream of its own: the solution itself is unchanged
-    plain = _stages(scenario.load('deck_paper', {'duration_s': 60.0, **REAL, 'master.latency_jitter_s': 0.0}, seed=5))[1]
+    plain = _stages(scenario.load('deck_paper', {'duration_s': 60.0, **REAL, 'master.latency_jitter_s': 0.0},
+                                  seed=5))[1]
     for a, b in zip(batch, plain):
         np.testing.assert_array_equal(a.sample.v_b, b.sample.v_b)
         np.testing.assert_array_equal(a.phi, b.phi)

@@ -200,7 +200,8 @@ def _score(truth_bag: Path, estimate_bag: Path, est: dict[str, np.ndarray], prob
     """The last estimate of deck matching against the truth at its time of validity (its stamp
     less the master latency the filter is told; the relative attitude moves on the gear and a
     flexing deck); an estimate held since an earlier output (the same vector: no match since, e.g.
-    a beam that lost its reflector) is valid where its last match was; None and a problem if unavailable (`optional`: a run with air data and no
+    a beam that lost its reflector) is valid where its last match was; None and a problem if
+    unavailable (`optional`: a run with air data and no
     deck phase has no misalignment to score)."""
     try:
         t_truth, truth = truth_from_bag(truth_bag, until_ns)
