@@ -84,3 +84,15 @@ def test_state_message_is_5_rows_of_the_models_states(model):
 def test_state_labels_must_match_the_state():
     with pytest.raises(ValueError, match='15 states but 12 labels'):
         convert.estimate_to_msgs(_estimate(15), VM15_LABELS[:12], np.zeros(3))
+
+
+def test_the_slave_solution_carries_its_own_time():
+    """An output made at a jittered master stamp: the misalignment keeps the stamp, the attitude
+    and the odometry (the INS solution) the time of the IMU sample they were integrated to."""
+    e = dataclasses.replace(_estimate(15), t_nav_ns=T_NS - 3_000_000, p_w=np.zeros(3), v_b=np.zeros(3),
+                            w_b=np.zeros(3), pose_cov=np.eye(6), twist_cov=np.eye(6))
+    mis, att, _ = convert.estimate_to_msgs(e, VM15_LABELS, np.zeros(3))
+    assert convert.to_ns(mis.header.stamp) == T_NS
+    assert convert.to_ns(att.header.stamp) == T_NS - 3_000_000
+    odom = convert.estimate_to_odometry(e)
+    assert odom is not None and convert.to_ns(odom.header.stamp) == T_NS - 3_000_000

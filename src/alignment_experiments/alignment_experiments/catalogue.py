@@ -215,8 +215,10 @@ DECK_GOAL = Experiment(
 # the filter block the papers' world was tuned with (catapult_paper, deck_paper): the aircraft rigid on
 # its spot (0.1 mm/s parked), lever arm and master latency taken as known, the slave's own specific force
 RIGID_TUNING = (('filter.parked_velocity_sigma_mps', 0.0001), ('filter.lever_arm_states', False),
-                ('filter.master_delay_state', False), ('filter.specific_force', 'slave'))
+                ('filter.master_delay_state', False), ('filter.specific_force', 'slave'),
+                ('filter.init_attitude_sigma_deg', 1.0))
 DEFAULT_AND_RIGID = (Cell('default', (('filter', 'default'),), ()),
+                     Cell('prior 1 deg', (('filter', 'prior 1 deg'),), (('filter.init_attitude_sigma_deg', 1.0),)),
                      Cell('rigid tuning', (('filter', 'rigid tuning'),), RIGID_TUNING))
 
 CONSISTENCY_CATAPULT = Experiment(
@@ -229,8 +231,9 @@ CONSISTENCY_CATAPULT = Experiment(
         "deck, a 2 s hold-back, the 3 s 2 g stroke. Scored on the slave INS's attitude at the release "
         "(east / north / up, what the aircraft carries away; on the gear the relative attitude swings by a "
         "degree). 'default': the scenario's filter (vm15 + kf, lever-arm and delay states, the master's "
-        "specific force); 'rigid tuning': the papers' rigid-deck tuning (0.1 mm/s parked, no lever-arm or "
-        "delay states, the slave's own specific force). An honest filter's average 3-dof NEES lies inside "
+        "specific force, a 0.5 deg attitude prior); 'prior 1 deg': the same with the papers' 1 deg prior; "
+        "'rigid tuning': the papers' rigid-deck tuning (0.1 mm/s parked, no lever-arm or delay states, the "
+        "slave's own specific force, 1 deg prior). An honest filter's average 3-dof NEES lies inside "
         "the 95 % chi-square bounds."),
     scenario='catapult',
     base=(),
@@ -252,8 +255,8 @@ CONSISTENCY_DECK = Experiment(
         "The default `deck` scenario: 300 s of velocity matching on the carrier at sea state 5 (spectral, "
         "MMG), on the landing gear with deck flexure, a beam LDV, the Schuler ship INS at 50 Hz with a 30 ms "
         "latency and jitter not told, a 5 cm survey error; scored at 250 s on the misalignment (the "
-        "instantaneous relative attitude, mounting + flexure + the gear's lean). 'default' and 'rigid "
-        "tuning' as in consistency_catapult. An honest filter's average 3-dof NEES lies inside the 95 % "
+        "instantaneous relative attitude, mounting + flexure + the gear's lean). 'default', 'prior 1 deg' "
+        "and 'rigid tuning' as in consistency_catapult. An honest filter's average 3-dof NEES lies inside the 95 % "
         "chi-square bounds."),
     scenario='deck',
     base=(),

@@ -44,8 +44,19 @@ def result_table(s: dict) -> list[str]:
     sig = np.array(s['misalignment_sigma_rad'])
     rows = [[AXES[k], f'{mu[k] * ARCMIN_PER_RAD:.3f}', f'{est[k] * ARCMIN_PER_RAD:.3f}',
              f'{(est[k] - mu[k]) * ARCMIN_PER_RAD:.3f}', f'{sig[k] * ARCMIN_PER_RAD:.3f}'] for k in range(3)]
-    head = f"Misalignment at t = {s['scored_at_s']:.2f} s (the end of deck matching), aircraft FLU axes, arcmin:"
-    return [head, '', *_table(['axis', 'truth', 'estimate', 'error', '1σ'], rows)]
+    head = f"Misalignment at t = {s['scored_at_s']:.2f} s (the end of deck matching)"
+    if s.get('misalignment_valid_s') is not None:
+        head += (f", the estimate held since its last match (valid at t = {s['misalignment_valid_s']:.2f} s, "
+                 "the truth taken there)")
+    out = [head + ', aircraft FLU axes, arcmin:', '', *_table(['axis', 'truth', 'estimate', 'error', '1σ'], rows)]
+    if s.get('attitude_error_rad') is not None:
+        err, sig = np.array(s['attitude_error_rad']), np.array(s['attitude_sigma_rad'])
+        out += ['', f"The slave INS's attitude error at t = {s['attitude_stamp_s']:.2f} s (what the aircraft "
+                "carries away), nav frame, arcmin:", '',
+                *_table(['axis', 'error', '1σ'], [[name, f'{err[k] * ARCMIN_PER_RAD:.3f}',
+                                                   f'{sig[k] * ARCMIN_PER_RAD:.3f}']
+                                                  for k, name in enumerate(('east', 'north', 'up'))])]
+    return out
 
 
 def whole_estimate(s: dict) -> list[str]:
