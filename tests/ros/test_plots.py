@@ -156,3 +156,10 @@ def test_report_of_a_truth_free_summary_with_the_whole_estimate():
     assert '| y (pitch) | -2.000 | 0.100 |' in text
     assert '| gyro_bias_x_radps | 0.5 | 0.1 | deg/h |' in text and '| master_delay_s | 20 | 0.1 | ms |' in text
     assert 'innovation whiteness: pass (last window: Ljung-Box p 0.42' in text
+
+
+def test_a_held_estimate_is_told_from_a_fresh_one():
+    """Estimates repeated bit for bit (no match since) are held; a changing one is fresh."""
+    from alignment_ros.plots.alignment import held
+    mu = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 0, 0], [2, 0, 0], [3, 0, 0]])
+    np.testing.assert_array_equal(held(mu), [False, False, False, True, True, False])

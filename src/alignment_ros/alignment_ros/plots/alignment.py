@@ -28,6 +28,15 @@ def misalignment_sigma(state: Labelled | None, t_s: np.ndarray) -> np.ndarray | 
     return np.column_stack([np.interp(t_s, state.t_s, sig[:, k], left=np.nan, right=np.nan) for k in range(3)])
 
 
+def held(mu: np.ndarray) -> np.ndarray:
+    """(K,) True where an estimate of the K (K, 3) repeats the one before it bit for bit: held, no
+    match since (e.g. a beam that lost its reflector before the release); its time of validity is
+    its last match's, which the bag does not give per output, so no error is drawn for it."""
+    out = np.zeros(len(mu), dtype=bool)
+    out[1:] = np.all(mu[1:] == mu[:-1], axis=1)
+    return out
+
+
 def misalignment(s: RunSeries, path: Path) -> Path | None:
     if s.misalignment is None:
         return None
@@ -36,6 +45,7 @@ def misalignment(s: RunSeries, path: Path) -> Path | None:
     sig = misalignment_sigma(s.state, t)
     sig_am = None if sig is None else sig * ARCMIN_PER_RAD
     truth = s.truth_misalignment
+    fresh = ~held(mu)
     fig, axs = style.figure(3, 2 if truth is not None else 1, 2.1)
     for k in range(3):
         ax = axs[k, 0]
@@ -50,6 +60,7 @@ def misalignment(s: RunSeries, path: Path) -> Path | None:
         if truth is not None:
             ax.plot(truth[0], truth[1][:, k] * ARCMIN_PER_RAD, 'k--', lw=1.0, label='truth')
             tv = np.interp(t, truth[0], truth[1][:, k] * ARCMIN_PER_RAD, left=np.nan, right=np.nan)
+            tv = np.where(fresh, tv, np.nan)
         lim = style.limits([mu_am[:, k], tv, *band], t)
         if lim:
             ax.set_ylim(*lim)
@@ -64,7 +75,7 @@ def misalignment(s: RunSeries, path: Path) -> Path | None:
 
 def _error_panel(ax, t: np.ndarray, mu_am: np.ndarray, truth_am: np.ndarray, sig_am: np.ndarray | None,
                  k: int) -> None:
-    """Error (estimate - truth, where the truth is defined: on deck) and ±3σ."""
+    """Error (estimate - truth, where the truth is defined, on deck, and the estimate not held) and ±3σ."""
     err = mu_am - truth_am
     ax.plot(t, err, color=style.AXIS_COLORS[k], lw=1.2, label='error')
     band = []
@@ -81,7 +92,7 @@ def _error_panel(ax, t: np.ndarray, mu_am: np.ndarray, truth_am: np.ndarray, sig
     ax.set_ylabel('error (arcmin)')
     if k == 0:
         ax.legend(loc='upper right', ncol=2)
-        ax.set_title('error (while the truth is defined)')
+        ax.set_title('error (truth defined, estimate not held)')
 
 
 def _rows(state: Labelled) -> tuple[str | None, str | None]:
