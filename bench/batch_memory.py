@@ -115,10 +115,36 @@ def top_sites(stats: list, n: int) -> list[str]:
     """One line per site: file (from the package on) and line, size, blocks (and the change)."""
     out = []
     for s in stats[:n]:
-        where = s.traceback[0].filename.split('alignment_core/alignment_core/')[-1]
+        where = s.traceback[0].filename.split('alignment_core/alignment_core/')[-1].split('site-packages/')[-1]
         diff = f'  ({s.size_diff / MIB:+.2f})' if hasattr(s, 'size_diff') else ''
         out.append(f'{where + ":" + str(s.traceback[0].lineno):32s} {s.size / MIB:8.2f} MiB {s.count:9d} blocks{diff}')
     return out
+
+
+class PeakCatcher:
+    """A profile hook (sys.setprofile) that, at every function return, snapshots tracemalloc when
+    the traced memory has grown PEAK_STEP past the last snapshot: the last snapshot is taken within
+    that step of the largest traced size seen at a return, with the call stack it was taken in."""
+    PEAK_STEP = 1.05
+
+    def __init__(self) -> None:
+        self.size = 0
+        self.snapshot: tracemalloc.Snapshot | None = None
+        self.stack = ''
+
+    def __call__(self, frame: types.FrameType, event: str, arg: object) -> None:
+        if event not in ('return', 'c_return'):
+            return
+        now = tracemalloc.get_traced_memory()[0]
+        if now > self.size * self.PEAK_STEP:
+            self.size, self.snapshot = now, tracemalloc.take_snapshot()
+            names = []
+            f: types.FrameType | None = frame
+            while f is not None and f.f_code.co_name != 'child':
+                names.append(f.f_code.co_qualname)
+                f = f.f_back
+            self.stack = ' < '.join(names) + (f' (returning from {getattr(arg, "__name__", "?")})'
+                                              if event == 'c_return' else '')
 
 
 def child(duration_s: float, trace: bool) -> dict:
@@ -130,6 +156,7 @@ def child(duration_s: float, trace: bool) -> dict:
         return out
     sc = scenario.load('deck', {'duration_s': duration_s}, seed=1)
     lines: list[str] = []
+    catcher = PeakCatcher()
     if trace:
         tracemalloc.start(1)
         ships = pipeline.ship_samples(sc)
@@ -139,15 +166,20 @@ def child(duration_s: float, trace: bool) -> dict:
                      f'for {len(ships)} samples')
         del ships
         tracemalloc.reset_peak()
+        sys.setprofile(catcher)
     t = time.perf_counter()
     inp = pipeline.simulate(sc)
+    sys.setprofile(None)
     out.update(simulate_s=time.perf_counter() - t, simulate_rss_mib=rss_mib(), simulate_peak_mib=peak_mib())
     if trace:
         now, peak = tracemalloc.get_traced_memory()
-        lines.append(f'simulate: traced {now / MIB:.1f} MiB held after, {peak / MIB:.1f} MiB at its peak; '
-                     'top sites held:')
+        lines.append(f'simulate: traced {now / MIB:.1f} MiB held after, {peak / MIB:.1f} MiB at its peak')
+        if catcher.snapshot is not None:
+            lines.append(f'  near the peak ({catcher.size / MIB:.1f} MiB traced) in {catcher.stack}; top sites:')
+            lines += ['    ' + x for x in top_sites(catcher.snapshot.statistics('lineno'), 10)]
         s1 = tracemalloc.take_snapshot()
-        lines += ['  ' + x for x in top_sites(s1.statistics('lineno'), 10)]
+        lines.append('  top sites held after simulate:')
+        lines += ['    ' + x for x in top_sites(s1.statistics('lineno'), 10)]
     t = time.perf_counter()
     filt = pipeline.align(sc, inp)
     out.update(align_s=time.perf_counter() - t, align_rss_mib=rss_mib(), align_peak_mib=peak_mib())
@@ -155,7 +187,7 @@ def child(duration_s: float, trace: bool) -> dict:
         now, peak = tracemalloc.get_traced_memory()
         lines.append(f'align: traced {now / MIB:.1f} MiB held after, {peak / MIB:.1f} MiB at the peak; '
                      'top sites added:')
-        lines += ['  ' + x for x in top_sites(tracemalloc.take_snapshot().compare_to(s1, 'lineno'), 10)]
+        lines += ['    ' + x for x in top_sites(tracemalloc.take_snapshot().compare_to(s1, 'lineno'), 10)]
         tracemalloc.stop()
     out.update(samples=len(inp.ships), imu=len(inp.imu), master=len(inp.master), ldv=len(inp.ldv),
                estimates=len(filt.outputs), trace=lines)
@@ -229,13 +261,17 @@ def main() -> int:
           f'differs by at most {own:.1f} MiB; sim peak: the child\'s ru_maxrss after simulate; MiB)')
     hours = np.array(durations) / 3600.0
     peaks = np.array([r['child_maxrss_mib'] for r in runs])
+    in_sim = [r['simulate_peak_mib'] >= r['child_maxrss_mib'] - 0.5 for r in runs]
+    where = ('inside simulate at every duration' if all(in_sim) else
+             f'inside simulate at {", ".join(f"{d:g}" for d, i in zip(durations, in_sim) if i) or "no"} s, '
+             'in align otherwise')
     if len(runs) >= 2:
         k, c = np.polyfit(hours, peaks, 1)
         res = float(np.max(np.abs(peaks - (c + k * hours))))
         kh, ch = np.polyfit(hours, [r['align_rss_mib'] for r in runs], 1)
         print(f'\npeak ~ {c:.0f} MiB + {k:.0f} MiB per simulated hour (least squares over {len(runs)} durations, '
-              f'largest residual {res:.1f} MiB; the import-only child: {b:.0f} MiB); held after align ~ '
-              f'{ch:.0f} + {kh:.0f} MiB/h: linear in duration, every sample of the run is kept')
+              f'largest residual {res:.1f} MiB; the import-only child: {b:.0f} MiB); the peak is reached {where}; '
+              f'RSS after align ~ {ch:.0f} MiB + {kh:.0f} MiB/h (every sample and every estimate of the run kept)')
     last = runs[-1]
     print(f'\nwhat the {durations[-1]:g} s run holds after align ({last["imu"]} IMU, {last["master"]} master, '
           f'{last["ldv"]} LDV samples, {last["estimates"]} estimates):')
