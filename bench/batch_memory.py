@@ -99,16 +99,15 @@ def deep_bytes(obj: object, seen: set[int]) -> float:
     return total
 
 
-def holdings(inp: object, filt: object) -> dict[str, float]:
-    """Bytes of each field of the Inputs and each attribute of the filter, in that order (what an
-    earlier one holds is not counted again)."""
+def holdings(inp: object, filt: object) -> dict[str, tuple[float, int]]:
+    """Bytes and items (a list's or tuple's length, else 0) of each field of the Inputs and each
+    attribute of the filter, in that order (what an earlier one holds is not counted again)."""
     seen: set[int] = set()
-    out = {f'inputs.{k}': deep_bytes(v, seen) for k, v in vars(inp).items()}
-    attrs = dict(vars(filt))
-    for k in ('_outputs', '_published'):
-        out[f'filter.{k}'] = deep_bytes(attrs.pop(k), seen)
-    out.update({f'filter.{k}': deep_bytes(v, seen) for k, v in attrs.items()})
-    return out
+    attrs = {f'inputs.{k}': v for k, v in vars(inp).items()}
+    rest = dict(vars(filt))
+    attrs.update({f'filter.{k}': rest.pop(k) for k in ('_outputs', '_published')})
+    attrs.update({f'filter.{k}': v for k, v in rest.items()})
+    return {k: (deep_bytes(v, seen), len(v) if isinstance(v, (list, tuple)) else 0) for k, v in attrs.items()}
 
 
 def top_sites(stats: list, n: int) -> list[str]:
@@ -214,13 +213,15 @@ def run_child(duration_s: float, trace: bool = False) -> dict:
     return out
 
 
-def summary(holds: dict[str, float], hours: float, held_mib: float) -> list[str]:
-    """The holdings from 1 % of their sum up, largest first, with MiB per simulated hour."""
-    total = sum(holds.values())
-    rows = sorted(holds.items(), key=lambda kv: -kv[1])
-    big = [(k, v) for k, v in rows if v >= 0.01 * total]
-    rest = total - sum(v for _, v in big)
-    lines = [f'  {k:28s} {v / MIB:8.1f} MiB  {v / MIB / hours:8.1f} MiB/h' for k, v in big]
+def summary(holds: dict[str, list], hours: float, held_mib: float) -> list[str]:
+    """The holdings from 1 % of their sum up, largest first, with MiB per simulated hour and bytes
+    per item of a list."""
+    total = sum(v for v, _ in holds.values())
+    rows = sorted(holds.items(), key=lambda kv: -kv[1][0])
+    big = [(k, v, n) for k, (v, n) in rows if v >= 0.01 * total]
+    rest = total - sum(v for _, v, _ in big)
+    lines = [f'  {k:28s} {v / MIB:8.1f} MiB  {v / MIB / hours:8.1f} MiB/h'
+             + (f'  {v / n:6.0f} B per item of {n}' if n else '') for k, v, n in big]
     lines.append(f'  {"(the rest)":28s} {rest / MIB:8.1f} MiB')
     lines.append(f'  {"sum":28s} {total / MIB:8.1f} MiB  {total / MIB / hours:8.1f} MiB/h  '
                  f'(RSS after align less the import-only child: {held_mib:.1f} MiB)')
