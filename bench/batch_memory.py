@@ -11,17 +11,28 @@ per simulated hour, the RSS after simulate and after align, and what the run hol
 walk of the Inputs and of the filter's attributes: numpy buffers once, long lists extrapolated
 from evenly spaced elements). A least-squares line through (duration, peak) gives the growth in
 MiB per simulated hour. --trace: one more child at the shortest duration under tracemalloc: the
-top allocation sites of what simulate leaves (the inputs) and of what align adds (the estimates),
-and the size of the ShipSample list simulate builds and drops (its transient).
+ship synthesis' peak and its ShipSample list (simulate builds it and drops it), the top allocation
+sites near simulate's traced peak (with the call stack there), of what simulate leaves (the
+inputs) and of what align adds (the estimates).
 
 Why: the batch pipeline keeps the whole run in memory by design (the filter is fed from lists of
 every sample, and the engine is built with keep_history=True, so every estimate is kept); this
-states how much, so a long run's memory can be planned (peak ~ base + k x duration) and a change
-that makes it worse shows.
+states how much, so a long run's memory can be planned and a change that makes it worse shows.
 
-Measured 2026-12-02 on this 2-core machine (durations 300, 900, 3600 s): see the report of the
-commit that added this file; the numbers are in the table printed below the docstring's summary
-line of each run (`scripts/bench.sh batch_memory`).
+Measured 2026-12-02 on this 2-core machine (quiet; durations 300, 900, 3600 s; peak RSS 209.0,
+447.5, 1519.6 MiB; wall 20, 60, 290 s; the import-only child 87.5 MiB): the peak grows linearly
+with the duration, peak ~ 90 MiB + 1430 MiB per simulated hour (largest residual 0.1 MiB; about
+4 kB per 100 Hz sample), because every sample of the whole run is held in memory. The bound:
+peak ~ base + k x duration, base ~ 90 MiB (the interpreter and libraries), k ~ 1.43 GiB per
+simulated hour. The peak is reached inside simulate, not at the end: at 300 s tracemalloc puts it
+in SlaveImuStage.run_batch (AircraftKinematics.increments_batch / _on_deck: about ten rotation
+temporaries of 216 B per sample each, 27 float64, and einsum workspace) on top of the inputs
+made so far; the ship synthesis adds a fixed ~45 MiB workspace (the whole peak below ~120 s).
+What the run keeps after align (~615 MiB per simulated hour by the walk; RSS after align
+~ 90 + 941 MiB/h, the rest presumably freed heap not handed back): per-sample Python records with small numpy
+arrays: LDV 132, IMU 126, estimates 122 (3.5 kB each, 10 Hz), master 114 MiB/h (368-664 B per
+sample for 48-104 B of numbers); the arrays: ship batch 55, aircraft truth 36, sensor truth
+29 MiB/h.
 """
 from __future__ import annotations
 
