@@ -3,7 +3,7 @@ misalignment, catapult stroke, sensor errors) and the aircraft truth; when refer
 a reference INS solution from that truth (/reference_ins/odom).
 
 Paired ship samples are collected and run through the stage in chunks (`SlaveImuStage.step_many`:
-one batched call costs about what one sample stepped alone does), up to CHUNK_MAX samples, or
+per sample, a chunk of 50 costs about a twentieth of a single `step`), up to CHUNK_MAX samples, or
 whatever is pending when the FLUSH_PERIOD_S wall timer fires, and at shutdown. Any split gives the
 records `step` gives sample by sample, bit for bit, so the messages, their stamps and their order
 are those of stepping; only when they go out changes, by at most a chunk (the ship's lead limit,
