@@ -266,3 +266,16 @@ def test_rotate_attitude_turns_the_nav_frame():
     got = rotations.rotate_attitude(q.as_quat(), phi)
     np.testing.assert_allclose(rotations.quat_to_dcm(got), (Rotation.from_rotvec(phi) * q).as_matrix(), atol=1e-15)
     assert np.linalg.norm(got) == pytest.approx(1.0, abs=1e-15)
+
+
+@pytest.mark.parametrize('k', [1, 2, 3, 7, 25, 1001])
+def test_rows_matmul_equals_one_row_at_a_time(k):
+    """A (K, 3) batch gives each row's one-row product bit for bit (a plain (K, 3) @ (3, 3) goes
+    to BLAS, whose rounding depends on K), for a transposed (Fortran-ordered) matrix too."""
+    rng = np.random.default_rng(k)
+    m = Rotation.random(random_state=1).as_matrix()
+    x = rng.standard_normal((k, 3)) * 1e6
+    for mat in (m, m.T):
+        rows = np.array([(x[i:i + 1] @ mat)[0] for i in range(k)])
+        assert rotations.rows_matmul(x, mat).tobytes() == rows.tobytes()
+        assert np.array_equal(rotations.rows_matmul(x[0], mat), x[0] @ mat)

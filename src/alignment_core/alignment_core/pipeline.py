@@ -3,6 +3,7 @@ same records the nodes exchange, so both give the same numbers for a scenario an
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -55,6 +56,35 @@ class SlaveImuStage:
                for k in range(len(gyro))]
         self.prev = sb.sample(len(sb) - 1)
         return truth, imu
+
+    def step_many(self, samples: Sequence[ShipSample]) -> list[tuple[AircraftTruth, ImuSample | None]]:
+        """`step` on each of K ship samples in turn, as one batched call: the same records, bit
+        for bit, and the same state afterwards (`prev`; the kinematics' gear, flexure and flight
+        path; the error model's random streams, bias processes and quantiser), for any split of
+        a run into chunks. Afterwards `errors.last_bias` holds one row (6,) per IMU sample
+        returned, in order (unchanged when none is), as `step` leaves one."""
+        if not samples:
+            return []
+        sb = ShipBatch.of(list(samples))
+        tau = (sb.t_ns - self.t0) / 1e9                                  # tau_of, elementwise
+        d = self.kin.truth_batch(sb, tau)
+        mis = relative_rotvec_batch(sb.q_nb, d['q_nb'])
+        out: list[tuple[AircraftTruth, ImuSample | None]] = [
+            (AircraftTruth(t_ns=int(sb.t_ns[k]), p_w=d['p_w'][k], q_nb=d['q_nb'][k], v_b=d['v_b'][k],
+                           w_b=d['w_b'][k], misalignment=mis[k], on_deck=bool(d['on_deck'][k])), None)
+            for k in range(len(sb))]
+        first = 0 if self.prev is not None else 1                        # index of the first IMU sample
+        if first < len(sb):
+            ends = sb if first else ShipBatch.of([self.prev, *samples])
+            tau_e = tau if first else np.concatenate([[tau_of(self.prev.t_ns, self.t0)], tau])
+            dth, dv = self.kin.increments_batch(ends.slice(slice(0, -1)), ends.slice(slice(1, None)),
+                                                tau_e[:-1], tau_e[1:])
+            gyro, accel = self.errors.measure_batch(dth, dv, tau_e[1:] - tau_e[:-1])
+            for j in range(len(gyro)):
+                k = first + j
+                out[k] = (out[k][0], ImuSample(t_ns=int(sb.t_ns[k]), gyro=gyro[j], accel=accel[j]))
+        self.prev = samples[-1]
+        return out
 
     def step(self, s: ShipSample) -> tuple[AircraftTruth, ImuSample | None]:
         tau = tau_of(s.t_ns, self.t0)

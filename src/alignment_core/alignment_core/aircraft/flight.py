@@ -358,7 +358,7 @@ class FlightPath:
         c_na = quat_to_dcm_batch(q)
         lat, lon = self._latlon(t)
         h = m['h']
-        p_w = self.plane.from_geodetic(lat, lon, h)
+        p_w = self.plane.from_geodetic_rows(lat, lon, h)               # batch = one at a time, bit for bit
         v_b = np.einsum('...ji,...j->...i', c_na, m['v_n'])
         return FlightState(q=q, c_na=c_na, w_na=w_na, v_n=m['v_n'], a_n=m['a_n'], v_b=v_b,
                            lat=lat, lon=lon, h=h, p_w=p_w, mu=m['mu'], alpha=m['alpha'], beta=m['beta'])

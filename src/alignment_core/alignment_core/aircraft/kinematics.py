@@ -60,6 +60,7 @@ from alignment_core.geometry.rotations import (
     relative_rotvec_batch,
     right_jacobian,
     rotvec_to_dcm_batch,
+    rows_matmul,
 )
 from alignment_core.rng import stage_rng
 from alignment_core.samples import AircraftTruth, ShipBatch, ShipSample
@@ -187,10 +188,10 @@ class AircraftKinematics:
             r, rd, rdd = r + d, rd + v, rdd + a
         if not self.vib_motion:
             return r, rd, rdd
-        rd = rd + self.vib.vel(tau) @ self.c_sa.T
+        rd = rd + rows_matmul(self.vib.vel(tau), self.c_sa.T)
         if vib_acc:
-            rdd = rdd + self.vib.acc(tau) @ self.c_sa.T
-        return r + self.vib.pos(tau) @ self.c_sa.T, rd, rdd
+            rdd = rdd + rows_matmul(self.vib.acc(tau), self.c_sa.T)
+        return r + rows_matmul(self.vib.pos(tau), self.c_sa.T), rd, rdd
 
     def _on_deck(self, c_nb, w, wd, v_n, a_n, p_w, tau, flex=None, vib_acc=True):
         """Aircraft nav quantities on the deck; leading dims (...) of tau, vectors (..., 3);
@@ -205,7 +206,7 @@ class AircraftKinematics:
                               np.einsum('...ij,...j->...i', c_nb, r))
         if flex is None:
             c_na = c_nb @ self.c_sa                                      # C_a^n
-            w_na = w @ self.c_sa                                         # C_s^a w (row form)
+            w_na = rows_matmul(w, self.c_sa)                             # C_s^a w (row form)
         else:
             c_sa = self._c_sa(flex)
             c_na = c_nb @ c_sa

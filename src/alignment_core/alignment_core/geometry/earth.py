@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 
+from alignment_core.geometry.rotations import rows_matmul
+
 A = 6378137.0                      # semi-major axis, m
 F = 1.0 / 298.257223563            # flattening
 E2 = F * (2.0 - F)                 # first eccentricity squared
@@ -103,8 +105,16 @@ class TangentPlane:
     def from_geodetic(self, lat, lon, h) -> np.ndarray:
         return (geodetic_to_ecef(lat, lon, h) - self.origin) @ self.c.T
 
+    def from_geodetic_rows(self, lat, lon, h) -> np.ndarray:
+        """from_geodetic with each of K points (lat, lon, h of shape (K,)) computed alone
+        (rotations.rows_matmul): K points give what K one-point calls give, bit for bit (the
+        aircraft truth, stepped or in chunks). from_geodetic keeps the ship models' numbers."""
+        return rows_matmul(geodetic_to_ecef(lat, lon, h) - self.origin, self.c.T)
+
     def to_geodetic(self, enu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return ecef_to_geodetic(np.asarray(enu) @ self.c + self.origin)
+        """Geodetic (lat, lon, h) of world points (..., 3); K points (K, 3) row by row
+        (rotations.rows_matmul), so a batch equals its points one at a time, bit for bit."""
+        return ecef_to_geodetic(rows_matmul(np.asarray(enu), self.c) + self.origin)
 
     def c_local_to_world(self, p_w) -> np.ndarray:
         """(..., 3, 3) rotation from the local-level ENU frame at world point(s) p_w (..., 3) to

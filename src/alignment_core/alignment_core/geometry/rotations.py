@@ -31,6 +31,17 @@ def floats(a) -> list[float]:
     return a.tolist() if type(a) is np.ndarray else [float(x) for x in a]
 
 
+def rows_matmul(x: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """x @ m with each row of a 2-D x (K, n) computed alone: numpy hands a (K, n) @ (n, p)
+    product to BLAS, whose rounding depends on K (its kernels tile the rows), so a batch would
+    not equal its rows bit for bit; a stack of (1, n) products is the same operation as one
+    row's, for any K. Other shapes (one vector, stacks): plain x @ m."""
+    x = np.asarray(x)
+    if x.ndim != 2:
+        return x @ m
+    return (x[:, None, :] @ m)[:, 0, :]
+
+
 # ----- skew matrices and cross products -----
 
 def skew(v) -> np.ndarray:

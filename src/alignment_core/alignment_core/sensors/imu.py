@@ -25,6 +25,7 @@ from typing import Literal
 
 import numpy as np
 
+from alignment_core.geometry.rotations import rows_matmul
 from alignment_core.rng import stage_rng
 from alignment_core.samples import ImuSample
 from alignment_core.units import ARCSEC, DPH, G0, UG
@@ -191,8 +192,8 @@ class ImuErrorModel:
         sh = np.sqrt(hh)
         dv_ideal = dv
         if self.scale is not None:
-            dtheta = dtheta @ self.scale[0].T
-            dv = dv @ self.scale[1].T
+            dtheta = rows_matmul(dtheta, self.scale[0].T)
+            dv = rows_matmul(dv, self.scale[1].T)
         dth = dtheta + self.gyro_bias * hh + n[:, :3] * self.cfg.arw * sh
         dvv = dv + self.accel_bias * hh + n[:, 3:] * self.cfg.vrw * sh
         bias = np.broadcast_to(np.r_[self.gyro_bias, self.accel_bias], (len(h), 6))
@@ -207,7 +208,7 @@ class ImuErrorModel:
             dvv = dvv + b[:, 3:] * hh
             bias = bias + b
         if self.g_sens is not None:
-            gs = dv_ideal @ self.g_sens.T
+            gs = rows_matmul(dv_ideal, self.g_sens.T)
             dth = dth + gs
             bias = bias + np.c_[gs / hh, np.zeros((len(h), 3))]
         if self.quant is not None:
