@@ -46,8 +46,9 @@ class Estimate:
     # SI, its 1-sigma is `sigma`; None: not computed
     state: np.ndarray | None = None   # (n,)
     report: Report | None = None      # what /diagnostics says at this output (set by the engine)
-    # the time the misalignment refers to: the stamp less the master latency the filter is told
-    # (docs/engine.md, time of validity); None: t_ns (an estimate made before this field)
+    # the time the misalignment refers to: its last master update's validity time (the stamp less
+    # the master latency the filter is told; a held one keeps its last match's; docs/engine.md,
+    # time of validity); None: t_ns (an estimate made before this field)
     t_valid_ns: int | None = None
     # the time the slave solution (q_nb, attitude_cov, p_w, v_b, w_b) refers to: the newest IMU
     # sample the INS has integrated when the output is made; None: t_ns
