@@ -36,6 +36,15 @@ def plane_of(sc: Scenario) -> earth.TangentPlane:
     return earth.TangentPlane(sc.ship.lat_deg * DEG, sc.ship.lon_deg * DEG, 0.0)
 
 
+def truth_records(sb: ShipBatch, d: dict[str, np.ndarray]) -> list[AircraftTruth]:
+    """One AircraftTruth per ship sample of sb from the kinematics' truth arrays d (each (K, ...)),
+    with the misalignment the aircraft's axes make with the ship's."""
+    rel = relative_rotvec_batch(sb.q_nb, d['q_nb'])
+    return [AircraftTruth(t_ns=int(sb.t_ns[k]), p_w=d['p_w'][k], q_nb=d['q_nb'][k], v_b=d['v_b'][k],
+                          w_b=d['w_b'][k], misalignment=rel[k], on_deck=bool(d['on_deck'][k]))
+            for k in range(len(sb))]
+
+
 class SlaveImuStage:
     """Ship sample in -> aircraft truth and (from the second sample on) a slave IMU sample."""
 
@@ -67,12 +76,8 @@ class SlaveImuStage:
             return []
         sb = ShipBatch.of(list(samples))
         tau = (sb.t_ns - self.t0) / 1e9                                  # tau_of, elementwise
-        d = self.kin.truth_batch(sb, tau)
-        mis = relative_rotvec_batch(sb.q_nb, d['q_nb'])
         out: list[tuple[AircraftTruth, ImuSample | None]] = [
-            (AircraftTruth(t_ns=int(sb.t_ns[k]), p_w=d['p_w'][k], q_nb=d['q_nb'][k], v_b=d['v_b'][k],
-                           w_b=d['w_b'][k], misalignment=mis[k], on_deck=bool(d['on_deck'][k])), None)
-            for k in range(len(sb))]
+            (truth, None) for truth in truth_records(sb, self.kin.truth_batch(sb, tau))]
         first = 0 if self.prev is not None else 1                        # index of the first IMU sample
         if first < len(sb):
             ends = sb if first else ShipBatch.of([self.prev, *samples])
@@ -187,11 +192,5 @@ def run(sc: Scenario, keep_truth: bool = True) -> BatchResult:
     wall = time.perf_counter()
     inp = simulate(sc)
     filt = align(sc, inp)
-    truths: list[AircraftTruth] = []
-    if keep_truth:
-        t = inp.truth
-        rel = relative_rotvec_batch(inp.ships.q_nb, t['q_nb'])
-        truths = [AircraftTruth(t_ns=int(inp.ships.t_ns[k]), p_w=t['p_w'][k], q_nb=t['q_nb'][k],
-                                v_b=t['v_b'][k], w_b=t['w_b'][k], misalignment=rel[k],
-                                on_deck=bool(t['on_deck'][k])) for k in range(len(inp.ships))]
+    truths = truth_records(inp.ships, inp.truth) if keep_truth else []
     return BatchResult(sc, list(filt.outputs), truths, filt, time.perf_counter() - wall)
