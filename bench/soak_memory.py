@@ -1,7 +1,7 @@
 """Memory soak: one long graph run of the deck scenario; every node's resident set size sampled
 while it runs and its slope fitted against simulated time (target: < 1 MiB per simulated hour).
 
-    scripts/bench.sh soak_memory [--duration-s 3600] [--rtf 5] [--every-s 5] [--set KEY=VALUE ...]
+    scripts/bench.sh soak_memory [--scenario deck] [--duration-s 3600] [--rtf 5] [--every-s 5] [--set KEY=VALUE ...]
 
 Simulated time is read from the run's /clock (a best-effort subscriber of depth 1 on the run's
 domain: it holds nothing back). The slope is fitted over the second half of the simulated run
@@ -77,6 +77,7 @@ def clock_reader(domain: int):
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    ap.add_argument('--scenario', default='deck')
     ap.add_argument('--duration-s', type=float, default=3600.0)
     ap.add_argument('--rtf', type=float, default=5.0)
     ap.add_argument('--every-s', type=float, default=5.0)
@@ -86,7 +87,7 @@ def main() -> int:
     ap.add_argument('--progress', action='store_true', help='print each sample (JSON) as it is taken')
     a = ap.parse_args()
     out = a.keep or Path(tempfile.mkdtemp(prefix='soak-')) / 'run'
-    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', 'deck_paper', '--out', str(out),
+    cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', a.scenario, '--out', str(out),
            '--real-time-factor', str(a.rtf), '--set', f'duration_s={a.duration_s}']
     for s in a.sets:
         cmd += ['--set', s]

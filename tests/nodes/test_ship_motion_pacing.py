@@ -77,7 +77,8 @@ def test_the_clock_source_does_not_listen_to_its_own_clock(ros):
 def test_the_ship_runs_no_further_than_its_lead_ahead_of_a_paced_stream(ros):
     """With pace_topics, the ship (even at real_time_factor 0) sends a sample only while the
     paced stream is within max_lead_s of it: nothing on the stream, it stops at t0 + lead; the
-    stream at t0 + 1 s lets it on to t0 + 1 s + lead, and no further."""
+    stream at t0 + 1 s lets it on to t0 + 1 s + lead, and no further; the stream then silent for
+    pace_release_s of wall time, the ship goes on without it to the end."""
     node, start = ros
     sc = scenario.load('catapult_paper', {'duration_s': 20.0})
     got: list[float] = []
@@ -86,6 +87,7 @@ def test_the_ship_runs_no_further_than_its_lead_ahead_of_a_paced_stream(ros):
     paced = node.create_publisher(Odometry, topics.TRUTH_AIRCRAFT_ODOM, qos.STREAM)
     start('ship_motion_node', '-p', f'wait_subscribers:=["{topics.CLOCK}:1","{GO}:1"]',
           '-p', f'pace_topics:=["{topics.TRUTH_AIRCRAFT_ODOM}"]', '-p', 'max_lead_s:=0.5',
+          '-p', 'pace_release_s:=4.0',
           sets={'real_time_factor': 0.0, 'duration_s': 20.0})
     spin_until(node, lambda: sub.get_publisher_count() >= 1 and paced.get_subscription_count() >= 1)
     node.create_subscription(Empty, GO, lambda m: None, qos.STREAM)
@@ -100,6 +102,8 @@ def test_the_ship_runs_no_further_than_its_lead_ahead_of_a_paced_stream(ros):
     spin_for(node, 1.5)
     assert got[-1] == pytest.approx(t0 + 1.5, abs=1e-9)
     assert len(got) == 151                                          # every sample once, none skipped
+    spin_until(node, lambda: got[-1] >= t0 + 20.0 - 1e-9, timeout=30.0)   # released: on to the end
+    assert len(got) == len(set(got)) and len(got) >= 2001
 
 
 def spin_for(node, seconds: float) -> None:

@@ -58,11 +58,13 @@ MATCHED = {
     'slave_ins_node': {topics.AIRCRAFT_IMU: 2, topics.TRUTH_AIRCRAFT_ODOM: 3, topics.TRUTH_MISALIGNMENT: 1,
                        topics.TRUTH_IMU_BIAS: 1},
     'ldv_node': {topics.LDV_TWIST: 2, topics.DOPPLER_TWIST: 2},   # filter + recorder
-    'alignment_filter_node': {t: 1 for t in topics.FILTER_OUTPUT_TOPICS},
+    'alignment_filter_node': {**{t: 1 for t in topics.FILTER_OUTPUT_TOPICS}, topics.ALIGN_MISALIGNMENT: 2},
 }
-# the ship runs at most its max_lead_s ahead of these (the LDV pairs the ship's odometry with the
-# slave's truth: without the bound it buffers the ship's for as long as the slave lags)
-PACE_TOPICS = (topics.TRUTH_AIRCRAFT_ODOM,)
+# the ship runs at most its lead ahead of these (alignment_ros.pacing): of the slave's truth (the
+# LDV pairs it with the ship's odometry and would buffer the ship's for as long as the slave lags)
+# and of the filter's output (the slowest consumer: every queue upstream of it holds at most the lead)
+PACE_TOPICS = (topics.TRUTH_AIRCRAFT_ODOM, topics.ALIGN_MISALIGNMENT)
+MAX_LEAD_S = 5.0
 NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node')
 AIR_DATA_TOPICS = (*topics.FADS_PORT_TOPICS, topics.AIR_DATA_VELOCITY, topics.AIR_DATA_STATIC_PRESSURE,
                    topics.AIR_DATA_TOTAL_PRESSURE, topics.AIR_DATA_WIND, topics.AIR_DATA_STATE,
@@ -89,12 +91,25 @@ def matched_of(sc: core_scenario.Scenario) -> dict[str, dict[str, int]]:
         m['air_data_filter_node'] = {t: 1 for t in (topics.AIR_DATA_VELOCITY, topics.AIR_DATA_STATIC_PRESSURE,
                                                     topics.AIR_DATA_TOTAL_PRESSURE, topics.AIR_DATA_WIND,
                                                     topics.AIR_DATA_STATE, topics.DIAGNOSTICS)}
+        m['air_data_filter_node'][topics.AIR_DATA_VELOCITY] += 1     # the ship's pacing watcher
         m['slave_ins_node'][topics.TRUTH_AIRCRAFT_ODOM] += 1
         m['slave_ins_node'][topics.AIRCRAFT_IMU] += int(paper)
         m['alignment_filter_node'][topics.ALIGN_ODOM] += int(aligned)
     if ref:
         m['slave_ins_node'][topics.REFERENCE_INS_ODOM] = 1 + int(air and not aligned)
     return m
+
+
+def pace_topics_of(sc: core_scenario.Scenario) -> tuple[str, ...]:
+    """PACE_TOPICS, and the air-data filter's output when the scenario has one."""
+    return PACE_TOPICS + ((topics.AIR_DATA_VELOCITY,) if sc.fads.enabled else ())
+
+
+def max_lead_of(sc: core_scenario.Scenario) -> float:
+    """MAX_LEAD_S, or three output periods of a filter publishing more slowly (the ship must be
+    able to run past a filter's next output for the filter to reach it)."""
+    rates = [sc.filter.output_rate_hz] + ([sc.air_data_filter.output_rate_hz] if sc.fads.enabled else [])
+    return max(MAX_LEAD_S, 3.0 / min(rates))
 
 
 def recorded_of(sc: core_scenario.Scenario) -> list[str]:
@@ -220,7 +235,8 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
             start(run, n, params, matched=matched)
         start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',
               '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']),
-              '-p', 'pace_topics:=[' + ','.join(f'"{t}"' for t in PACE_TOPICS) + ']')
+              '-p', 'pace_topics:=[' + ','.join(f'"{t}"' for t in pace_topics_of(sc)) + ']',
+              '-p', f'max_lead_s:={max_lead_of(sc)}')
         timeout = a.timeout or 120.0 + 3.0 * sc.duration_s
         deadline = time.monotonic() + timeout
         while rec.poll() is None and not end_reached.is_set():

@@ -38,15 +38,20 @@ class ShipMotionNode(node_util.CountingNode):
         self.declare_parameter('fix_decimation', 10, ParameterDescriptor(
             description='publish /ship/fix every N samples'))
         self.declare_parameter('pace_topics', [''], ParameterDescriptor(
-            description='stamped streams downstream (one message per ship sample, e.g. '
-                        '/truth/aircraft/odom) the ship may not run more than max_lead_s ahead of'))
+            description='stamped streams downstream (e.g. /truth/aircraft/odom, the filter\'s '
+                        '/alignment/misalignment) the ship may not run more than max_lead_s ahead of'))
         self.declare_parameter('max_lead_s', 5.0, ParameterDescriptor(
             description='simulated seconds the ship may run ahead of pace_topics (> 0)'))
+        self.declare_parameter('pace_release_s', 10.0, ParameterDescriptor(
+            description='wall seconds a silent paced stream is waited for before the ship goes on '
+                        'without it (until it advances again; > 0)'))
         self.add_on_set_parameters_callback(self._check)
         if self.get_parameter('real_time_factor').value < 0:
             raise ConfigError('real_time_factor must be >= 0')
         if not self.get_parameter('max_lead_s').value > 0:
             raise ConfigError('max_lead_s must be > 0')
+        if not self.get_parameter('pace_release_s').value > 0:
+            raise ConfigError('pace_release_s must be > 0')
         self.sc = ScenarioParameters(self, NODE_SCOPES['ship_motion_node']).scenario
         self.source = pipeline.ship_source(self.sc)
         self.plane = pipeline.plane_of(self.sc)
@@ -65,7 +70,8 @@ class ShipMotionNode(node_util.CountingNode):
         unknown = [t for t in names if t not in topics.TOPIC_TYPES or stamp_reader(topics.TOPIC_TYPES[t]) is None]
         if unknown:
             raise ConfigError(f'pace_topics: not stamped topics of the graph: {unknown}')
-        lead = LeadLimit(names, round(self.get_parameter('max_lead_s').value * 1e9), self.sc.t0_ns)
+        lead = LeadLimit(names, round(self.get_parameter('max_lead_s').value * 1e9), self.sc.t0_ns,
+                         release_s=self.get_parameter('pace_release_s').value)
         for t in names:
             read = stamp_reader(topics.TOPIC_TYPES[t])
             self.create_subscription(topics.msg_class(topics.TOPIC_TYPES[t]), t,
@@ -73,18 +79,26 @@ class ShipMotionNode(node_util.CountingNode):
         return lead
 
     def _keep_lead(self, t_ns: int, stop) -> None:
-        """Wait (spinning) until every paced stream is within the lead of t_ns."""
+        """Wait (spinning) until every paced stream is within the lead of t_ns or released."""
         if self.lead is None or not self.lead.behind(t_ns):
             return
-        self.pace_waits += 1
         w0 = time.monotonic()
-        while self.lead.behind(t_ns) and not stop():
+        released = self.lead.releases
+        if not self.lead.holding(t_ns, w0):
+            return
+        self.pace_waits += 1
+        while self.lead.holding(t_ns, w0) and not stop():
             self.flush_held()        # what waits for its subscribers to match may be what is awaited
             self.executor_ref.spin_once(timeout_sec=0.01)
         self.pace_wait_s += time.monotonic() - w0
+        if self.lead.releases > released:
+            self.get_logger().warning(
+                f'paced streams silent for {self.lead.release_s:g} s, going on without them: '
+                f'{sorted(self.lead.released)} (behind t = {t_ns * 1e-9:.3f} s)')
 
     def stats(self) -> dict:
-        return {**super().stats(), 'pace_waits': self.pace_waits, 'pace_wait_s': round(self.pace_wait_s, 3)}
+        return {**super().stats(), 'pace_waits': self.pace_waits, 'pace_wait_s': round(self.pace_wait_s, 3),
+                'pace_releases': self.lead.releases if self.lead is not None else 0}
 
     def _check(self, params) -> SetParametersResult:
         for p in params:

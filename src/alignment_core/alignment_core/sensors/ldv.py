@@ -17,6 +17,7 @@ s u (the velocity along the beam, ship axes) and the unit line of sight u (`LdvS
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -24,7 +25,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from alignment_core.geometry import earth
-from alignment_core.geometry.rotations import cross
+from alignment_core.geometry.rotations import cross, rotate_batch
 from alignment_core.rng import stage_rng
 from alignment_core.samples import AircraftTruth, LdvSample, ShipBatch, ShipSample
 from alignment_core.sensors.ldv_beam import line_of_sight, visible
@@ -151,19 +152,18 @@ class LdvModel:
         if cfg.mode == 'beam':
             return self._beam_batch(sb, p_a, q_a, v_a_b, w_a_b)
         n = self.rng.standard_normal((len(sb), 3)) * cfg.noise_mps
-        c_ns = Rotation.from_quat(sb.q_nb).inv()                           # C_n^s
         c_lw = np.swapaxes(self.plane.c_local_to_world(sb.p_w), -1, -2)  # world -> local ENU
-        r = c_ns.apply(np.einsum('kij,kj->ki', c_lw, p_a - sb.p_w))
+        r = rotate_batch(sb.q_nb, np.einsum('kij,kj->ki', c_lw, p_a - sb.p_w), inverse=True)   # C_n^s
         d = r - np.asarray(cfg.origin_m)
         if cfg.track_heading_deg == 0.0:
             along, across = d[:, 0], np.hypot(d[:, 1], d[:, 2])
         else:
-            along = d @ self.track
+            along = np.einsum('ki,i->k', d, self.track)
             across = np.linalg.norm(d - along[:, None] * self.track, axis=1)
         valid = (along >= -cfg.beam_halfwidth_m) & (along <= cfg.track_length_m) & (across <= cfg.beam_halfwidth_m)
-        v_a_n = Rotation.from_quat(q_a).apply(v_a_b)
-        v_s_n = Rotation.from_quat(sb.q_nb).apply(sb.v_b)
-        v_true = c_ns.apply(v_a_n - v_s_n) - cross(sb.w_b, r)
+        v_a_n = rotate_batch(q_a, v_a_b)
+        v_s_n = rotate_batch(sb.q_nb, sb.v_b)
+        v_true = rotate_batch(sb.q_nb, v_a_n - v_s_n, inverse=True) - cross(sb.w_b, r)
         if cfg.max_range_m > 0.0:
             valid &= np.linalg.norm(r - self.head, axis=1) <= cfg.max_range_m
         if cfg.max_speed_mps > 0.0:
@@ -184,12 +184,12 @@ class LdvModel:
         cfg = self.cfg
         c_ns = Rotation.from_quat(sb.q_nb).inv()
         c_lw = np.swapaxes(self.plane.c_local_to_world(sb.p_w), -1, -2)
-        r = c_ns.apply(np.einsum('kij,kj->ki', c_lw, p_a - sb.p_w))
+        r = rotate_batch(sb.q_nb, np.einsum('kij,kj->ki', c_lw, p_a - sb.p_w), inverse=True)
         d = r - np.asarray(cfg.origin_m)
-        along = d @ self.track
+        along = np.einsum('ki,i->k', d, self.track)
         across = np.linalg.norm(d - along[:, None] * self.track, axis=1)
         valid = (along >= -cfg.beam_halfwidth_m) & (along <= cfg.track_length_m) & (across <= cfg.beam_halfwidth_m)
-        v_rel = c_ns.apply(Rotation.from_quat(q_a).apply(v_a_b) - Rotation.from_quat(sb.q_nb).apply(sb.v_b)) \
+        v_rel = rotate_batch(sb.q_nb, rotate_batch(q_a, v_a_b) - rotate_batch(sb.q_nb, sb.v_b), inverse=True) \
             - cross(sb.w_b, r)
         if cfg.max_range_m > 0.0:
             valid &= np.linalg.norm(r - self.head, axis=1) <= cfg.max_range_m
@@ -235,6 +235,22 @@ class LdvStage:
     def step(self, s: ShipSample, a: AircraftTruth) -> list[LdvSample]:
         new = self._stamped([self.model.measure(s, a)]) if self.timing.due(s.t_ns) else []
         return self.timing.release(s.t_ns, new)
+
+    def step_many(self, ships: Sequence[ShipSample], aircraft: Sequence[AircraftTruth]) -> list[LdvSample]:
+        """`step` on each of K (ship, aircraft) pairs in turn, as one batched call: the same
+        samples, bit for bit, and the same state afterwards (noise stream, dropouts, pending
+        releases); what `step` releases on the way comes out at the last pair's time."""
+        if not ships:
+            return []
+        sb = ShipBatch.of(list(ships))
+        idx = np.flatnonzero(self.timing.due_mask(sb.t_ns))
+        new: list[LdvSample] = []
+        if len(idx):
+            sel = [aircraft[i] for i in idx]
+            new = self._stamped(self.model.measure_batch(
+                sb.slice(idx), np.array([a.p_w for a in sel]), np.array([a.q_nb for a in sel]),
+                np.array([a.v_b for a in sel]), np.array([a.w_b for a in sel])))
+        return self.timing.release(int(sb.t_ns[-1]), new)
 
     def run_batch(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray,
                   w_a_b: np.ndarray | None = None) -> list[LdvSample]:
