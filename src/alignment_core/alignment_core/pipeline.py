@@ -23,6 +23,7 @@ from alignment_core.samples import (
     ShipBatch,
     ShipSample,
 )
+from alignment_core.sensors import ldv_wire
 from alignment_core.sensors.doppler_radar import DopplerStage
 from alignment_core.sensors.imu import ImuErrorModel
 from alignment_core.sensors.ldv import LdvStage
@@ -173,7 +174,7 @@ def align(sc: Scenario, inp: Inputs, final: bool = True) -> TransferAlignment:
         if k > 0:
             filt.push_imu(inp.imu[k - 1])
         while j_ldv < len(inp.ldv) and inp.ldv[j_ldv].t_ns <= t:
-            filt.push_ldv(inp.ldv[j_ldv])
+            filt.push_ldv(ldv_wire.transmitted(inp.ldv[j_ldv]))     # as the filter node decodes it
             j_ldv += 1
         while j_dop < len(doppler) and doppler[j_dop].t_ns <= t:
             filt.push_doppler(doppler[j_dop])

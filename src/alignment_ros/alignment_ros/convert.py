@@ -18,6 +18,7 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from alignment_core.estimation.outputs import Estimate
 from alignment_core.samples import AircraftTruth, DopplerSample, ImuSample, LdvSample, MasterSample, ShipSample
+from alignment_core.sensors import ldv_wire
 
 from . import topics
 
@@ -119,47 +120,24 @@ def msg_to_imu(m: Imu) -> ImuSample:
 
 
 def ldv_to_msg(s: LdvSample) -> TwistWithCovarianceStamped:
-    """/ldv/twist. A vector LDV: linear = the velocity, covariance sigma^2 I. A beam LDV: linear =
-    s u (the component along the unit line of sight u times u), covariance sigma^2 u u^T (rank 1:
-    it says the direction; the other two are not measured). covariance[0] = -1: no measurement."""
+    """/ldv/twist (alignment_core.sensors.ldv_wire: the velocity, and a linear covariance that
+    says what was measured; covariance[0] = -1: no measurement)."""
     m = TwistWithCovarianceStamped()
     m.header.stamp = stamp(s.t_ns)
     m.header.frame_id = topics.FRAME_SHIP
+    linear, cov = ldv_wire.encode(s)
     if s.valid:
-        _v3(m.twist.twist.linear, s.v_s)
-        if s.beam is None:
-            for i in (0, 7, 14):
-                m.twist.covariance[i] = s.sigma**2
-        else:
-            c = s.sigma**2 * np.outer(s.beam, s.beam)
-            for i in range(3):
-                for j in range(3):
-                    m.twist.covariance[6 * i + j] = float(c[i, j])
-    else:
-        m.twist.covariance[0] = -1.0              # no measurement (aircraft out of the beam)
+        _v3(m.twist.twist.linear, linear)
+    for i in range(3):
+        for j in range(3):
+            m.twist.covariance[6 * i + j] = float(cov[i, j])
     return m
 
 
-BEAM_RANK_TOLERANCE = 1e-9
-"""A linear covariance block whose second eigenvalue is below this fraction of its trace is a
-beam's (rank 1)."""
-
-
 def msg_to_ldv(m: TwistWithCovarianceStamped) -> LdvSample:
-    """The LdvSample of /ldv/twist (`ldv_to_msg`): a rank-1 linear covariance is a beam, its
-    direction the unit eigenvector of the non-zero eigenvalue (its sign is immaterial: the
-    measurement is a projection) and sigma^2 its trace."""
-    c0 = m.twist.covariance[0]
-    valid = c0 >= 0.0
-    v = _a3(m.twist.twist.linear)
-    if not valid:
-        return LdvSample(t_ns=to_ns(m.header.stamp), v_s=v, sigma=math.nan, valid=False)
+    """The LdvSample of /ldv/twist (`ldv_to_msg`; a rank-1 linear covariance is a beam)."""
     cov = np.array(m.twist.covariance, dtype=float).reshape(6, 6)[:3, :3]
-    trace = float(np.trace(cov))
-    w, vec = np.linalg.eigh(0.5 * (cov + cov.T)) if np.all(np.isfinite(cov)) else (None, None)
-    if w is not None and trace > 0.0 and w[1] <= BEAM_RANK_TOLERANCE * trace:
-        return LdvSample(t_ns=to_ns(m.header.stamp), v_s=v, sigma=math.sqrt(trace), valid=True, beam=vec[:, 2])
-    return LdvSample(t_ns=to_ns(m.header.stamp), v_s=v, sigma=math.sqrt(c0), valid=True)
+    return ldv_wire.decode(to_ns(m.header.stamp), _a3(m.twist.twist.linear), cov)
 
 
 def doppler_to_msg(s: DopplerSample) -> TwistWithCovarianceStamped:

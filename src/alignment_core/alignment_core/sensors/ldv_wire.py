@@ -1,0 +1,53 @@
+"""The LDV sample as the wire carries it (/ldv/twist, TwistWithCovarianceStamped): the velocity,
+and a 3x3 linear covariance that says what was measured. A vector LDV: sigma^2 I. A beam LDV:
+sigma^2 u u^T (rank 1: the unit line of sight u, the other two directions unmeasured). No
+measurement: covariance[0] = -1.
+
+A beam's u and sigma come back from the covariance (the eigenvector of its one non-zero
+eigenvalue, the square root of its trace) to within rounding, and the sign of u may flip (immaterial:
+the measurement is a projection). So that a run through the graph and the batch pipeline feed
+the filter the same bits, the batch feeds it `transmitted(s)`: the sample after this encoding and
+decoding, exactly what the filter node decodes from the message."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from alignment_core.samples import LdvSample
+
+BEAM_RANK_TOLERANCE = 1e-9
+"""A linear covariance block whose second eigenvalue is below this fraction of its trace is a
+beam's (rank 1)."""
+
+
+def encode(s: LdvSample) -> tuple[np.ndarray, np.ndarray]:
+    """(linear velocity (3,), linear covariance (3, 3)) of a sample; covariance[0, 0] = -1 and
+    zeros elsewhere when it is not valid."""
+    cov = np.zeros((3, 3))
+    if not s.valid:
+        cov[0, 0] = -1.0
+        return np.array(s.v_s, dtype=float), cov
+    if s.beam is None:
+        cov[0, 0] = cov[1, 1] = cov[2, 2] = s.sigma**2
+    else:
+        cov = s.sigma**2 * np.outer(s.beam, s.beam)
+    return np.array(s.v_s, dtype=float), cov
+
+
+def decode(t_ns: int, linear: np.ndarray, cov: np.ndarray) -> LdvSample:
+    """The LdvSample of a velocity (3,) and its linear covariance (3, 3) (`encode`)."""
+    c0 = float(cov[0, 0])
+    v = np.array(linear, dtype=float)
+    if not c0 >= 0.0:
+        return LdvSample(t_ns=t_ns, v_s=v, sigma=math.nan, valid=False)
+    trace = float(np.trace(cov))
+    w, vec = np.linalg.eigh(0.5 * (cov + cov.T)) if np.all(np.isfinite(cov)) else (None, None)
+    if w is not None and trace > 0.0 and w[1] <= BEAM_RANK_TOLERANCE * trace:
+        return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(trace), valid=True, beam=vec[:, 2])
+    return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(c0), valid=True)
+
+
+def transmitted(s: LdvSample) -> LdvSample:
+    """The sample the filter decodes from the message of `s`."""
+    return decode(s.t_ns, *encode(s))
