@@ -26,9 +26,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from alignment_core.gauss_markov import gm2_discrete
+from alignment_core.recent_rows import RecentRows
 from alignment_core.rng import stage_rng
 from alignment_core.units import ARCMIN
 from alignment_core.validation import require
+
+KEEP = 256
+"""Samples before the least index of a read that stay readable (the next increments read back
+to the previous sample)."""
 
 
 @dataclass(frozen=True)
@@ -81,20 +86,16 @@ class FlexureProcess:
         self.l_t = np.stack([_chol(x[1]).T for x in d])
         p0 = np.stack([_chol(x[2]).T for x in d])
         self.x = self.rng.standard_normal((len(procs), 3, 2)) @ p0       # (P, 3 axes, 2)
-        self._th = np.empty((1024, 3))
-        self._thd = np.empty((1024, 3))
+        self._th, self._thd = RecentRows(3), RecentRows(3)
         self._n = 0
         self.k_change = (int(round(cfg.change_at_s * rate_hz)) if cfg.change_at_s > 0.0 and cfg.change_factor != 1.0
                          else None)
         self._store()
 
     def _store(self) -> None:
-        if self._n == len(self._th):
-            self._th = np.concatenate([self._th, np.empty_like(self._th)])
-            self._thd = np.concatenate([self._thd, np.empty_like(self._thd)])
         s = self.x.sum(axis=0)
-        self._th[self._n] = self.static + s[:, 0]
-        self._thd[self._n] = s[:, 1]
+        self._th.append(self.static + s[:, 0])
+        self._thd.append(s[:, 1])
         self._n += 1
 
     def _extend(self, k_max: int) -> None:
@@ -112,10 +113,16 @@ class FlexureProcess:
         return np.rint(np.asarray(tau, dtype=float) * self.rate_hz).astype(np.int64)
 
     def at(self, k) -> tuple[np.ndarray, np.ndarray]:
-        """(theta, theta') (…, 3) at sample indices k (…)."""
+        """(theta, theta') (…, 3) at sample indices k (…). The samples more than KEEP before the
+        least index asked for are let go (recent_rows.py): reads move forward in a node's run,
+        and a batch asks for everything at once."""
         k = np.asarray(k)
         if k.size:
             self._extend(int(k.max()))
+            out = self._th[k], self._thd[k]
+            for rows in (self._th, self._thd):
+                rows.forget_before(int(k.min()) - KEEP)
+            return out
         return self._th[k], self._thd[k]
 
     def generate(self, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -19,7 +19,9 @@ all at once: the same operations, so stepping and batch agree bit for bit). Betw
 the IMU point's displacement is the quintic Hermite through the samples' displacement,
 velocity and acceleration (one smooth motion whose derivatives are consistent for the
 increments); the rotation is given at the samples (the kinematics interpolates it as it does
-the deck flexure).
+the deck flexure). Only the recent samples are kept (recent_rows.py): a feed lets those more
+than KEEP samples before its first go, so a node's gear holds a bounded history however long
+it runs (a batch that feeds everything at once keeps everything).
 """
 from __future__ import annotations
 
@@ -28,9 +30,12 @@ import numpy as np
 from alignment_core.air_data.turbulence_spec import MIN_AIRSPEED, dryden_parameters
 from alignment_core.aircraft.gear_config import GearConfig
 from alignment_core.aircraft.landing_gear import N_DOF, GearModel
+from alignment_core.recent_rows import RecentRows
 from alignment_core.rng import stage_rng
 
 _SAMPLE_TOL = 1e-9
+KEEP = 256
+"""Samples before a feed's first that stay readable (the increments read the previous one)."""
 
 
 def _second_order_transition(ds: float) -> np.ndarray:
@@ -95,9 +100,7 @@ class GearResponse:
         self.holdback = holdback if cfg.holdback_tension_n > 0.0 else None
         self.holdback_b = self.model.holdback_load()
         self.imu_rows = self.model.point_rows(np.asarray(cfg.imu_from_cg_m, dtype=float))
-        self._q = np.empty((1024, N_DOF))
-        self._qd = np.empty((1024, N_DOF))
-        self._qdd = np.empty((1024, N_DOF))
+        self._q, self._qd, self._qdd = RecentRows(N_DOF), RecentRows(N_DOF), RecentRows(N_DOF)
         self._n = 0
         self._x: np.ndarray | None = None
         self._load: np.ndarray | None = None
@@ -133,7 +136,8 @@ class GearResponse:
         if self.holdback is not None:
             load = load + self.holdback_tension(k * self.dt_ns / 1e9)[:, None] * self.holdback_b
         noise = self.gust.draw(len(k)) if self.gust.on else None
-        self._grow(self._n + len(k))
+        for rows in (self._q, self._qd, self._qdd):
+            rows.forget_before(self._n - KEEP)
         for j in range(len(k)):
             f = load[j]
             if noise is not None:
@@ -150,14 +154,10 @@ class GearResponse:
             if self.model.polytropic:
                 self._excess = self.model.nonlinear_load(self._x[:N_DOF])
             q, qd = self._x[:N_DOF], self._x[N_DOF:]
-            self._q[self._n], self._qd[self._n] = q, qd
-            self._qdd[self._n] = self.model.acceleration(q, qd, f)
+            self._q.append(q)
+            self._qd.append(qd)
+            self._qdd.append(self.model.acceleration(q, qd, f))
             self._n += 1
-
-    def _grow(self, n: int) -> None:
-        while n > len(self._q):
-            self._q, self._qd, self._qdd = (np.concatenate([a, np.empty_like(a)])
-                                            for a in (self._q, self._qd, self._qdd))
 
     def states(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """q, q', q'' (..., 9) at simulated sample indices k (...)."""

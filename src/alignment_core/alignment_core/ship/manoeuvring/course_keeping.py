@@ -22,7 +22,8 @@ lon0 + int v_E / (R_N cos lat) dt, by 8-point Gauss-Legendre on each step (and o
 step up to t), so lon' = v_E / (R_N cos lat). Heights are zero (heave is wave frequency).
 
 The grid extends lazily (blocks of `BLOCK` steps) as later times are asked for: any chunking
-of the evaluation gives the same numbers.
+of the evaluation gives the same numbers. Only the recent steps are kept (KEEP before the least
+time read), so a node's track holds a bounded history however long it runs.
 """
 from __future__ import annotations
 
@@ -31,12 +32,16 @@ import math
 import numpy as np
 
 from alignment_core.geometry import earth
+from alignment_core.recent_rows import RecentRows
 from alignment_core.ship.manoeuvring.autopilot import Autopilot, CourseSchedule, SteeringGear
 from alignment_core.ship.manoeuvring.mmg import I_E, I_N, I_P, I_PHI, I_PSI, I_R, I_U, I_V, MmgModel, rk4_step
 
 WARMUP_S = 600.0
 SHAFT_LAG_S = 20.0
 BLOCK = 1024
+KEEP = 2 * BLOCK
+"""Grid steps before the least time of a read that stay readable (recent_rows.py; the spectral
+motion's knot blocks reach back that far at most)."""
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _GL_U = 0.5 * (_GL_X + 1.0)                   # nodes on [0, 1]
@@ -130,10 +135,10 @@ class ManoeuvringTrack:
         self.offset = (y[I_N], y[I_E])
         self._y = y                                   # state at the last knot
         self._f = self.rhs(0.0, y)                    # its derivative
-        self.states = np.array([y])
-        self.derivs = np.array([self._f])
-        self.coef = np.empty((0, 4, 6))
-        self.lon_knots = np.array([lon0])
+        self._steps = 0                               # grid steps integrated (knots 0 .. steps)
+        self._coef = RecentRows(4 * 6)                # quintic coefficients (4, 6) per step
+        self._lon_knots = RecentRows(1)               # longitude at each knot
+        self._lon_knots.append(np.array([lon0]))
 
     def _revs_for(self, speed: float) -> float:
         if speed not in self._revs:
@@ -154,34 +159,35 @@ class ManoeuvringTrack:
     # --- grid --------------------------------------------------------------------------------
     @property
     def t_end(self) -> float:
-        return (len(self.states) - 1) * self.h
+        return self._steps * self.h
 
     def _extend(self, n: int) -> None:
-        h, k0 = self.h, len(self.states) - 1
+        h, k0 = self.h, self._steps
         ys, fs = [], []
         y, f = self._y, self._f
+        prev_y, prev_f = np.array(y, dtype=float), np.array(f, dtype=float)
         for k in range(n):
             y, _ = rk4_step(self.rhs, (k0 + k) * h, y, h)
             f = self.rhs((k0 + k + 1) * h, y)
             ys.append(y)
             fs.append(f)
         self._y, self._f = y, f
-        prev_y, prev_f = self.states[-1], self.derivs[-1]
-        self.states = np.vstack([self.states, ys])
-        self.derivs = np.vstack([self.derivs, fs])
+        self._steps += n
         y0 = np.vstack([prev_y, ys[:-1]]) if n > 1 else prev_y[None]
         f0 = np.vstack([prev_f, fs[:-1]]) if n > 1 else prev_f[None]
         y1, f1 = np.asarray(ys), np.asarray(fs)
         ch0, ch1 = self._channels(y0, f0), self._channels(y1, f1)
         coef = quintic_coefficients(*ch0, *ch1, h)     # (n, 4, 6)
-        self.coef = np.concatenate([self.coef, coef])
+        for c in coef:
+            self._coef.append(c.ravel())
         # longitude at the new knots
         nodes = _GL_U[None, :]
         north = quintic_values(coef[:, None, 0], nodes, h, 0)[0]
         e_dot = quintic_values(coef[:, None, 1], nodes, h, 1)[1]
         q = self._q(north)
         inc = h * np.sum(q * e_dot * _GL_WU, axis=1)
-        self.lon_knots = np.concatenate([self.lon_knots, self.lon_knots[-1] + np.cumsum(inc)])
+        for lon in self._lon_knots[self._lon_knots.n - 1][0] + np.cumsum(inc):
+            self._lon_knots.append(np.array([lon]))
 
     def _channels(self, y, f):
         """(value, first, second derivative), each (n, 4), of north, east, psi, phi (north
@@ -215,9 +221,9 @@ class ManoeuvringTrack:
         if len(t):
             self._ensure(float(np.max(t)))
         h = self.h
-        idx = np.clip(np.floor(t / h).astype(np.int64), 0, len(self.coef) - 1)
+        idx = np.clip(np.floor(t / h).astype(np.int64), 0, self._coef.n - 1)
         s = t / h - idx
-        c = self.coef[idx]                                           # (N, 4, 6)
+        c = self._coef[idx].reshape(-1, 4, 6)                        # (N, 4, 6)
         val, d1, d2 = quintic_values(c, s[:, None], h, 2)
         north, east = val[:, 0], val[:, 1]
         lat = lat_of_north(north, self.lat0, self.arc0)
@@ -226,7 +232,10 @@ class ManoeuvringTrack:
         n_nodes = quintic_values(c[:, None, 0], nodes, h, 0)[0]
         ed_nodes = quintic_values(c[:, None, 1], nodes, h, 1)[1]
         part = h * s * np.sum(self._q(n_nodes) * ed_nodes * _GL_WU, axis=1)
-        lon = self.lon_knots[idx] + part
+        lon = self._lon_knots[idx][:, 0] + part
+        if len(idx):                        # a node's reads move forward; a batch reads all at once
+            self._coef.forget_before(int(idx.min()) - KEEP)
+            self._lon_knots.forget_before(int(idx.min()) - KEEP)
         n = len(t)
         v_n = np.zeros((n, 3))
         a_n = np.zeros((n, 3))

@@ -1,0 +1,51 @@
+"""Rows of a sampled process by sample index, of which only the recent ones are kept.
+
+A simulation stage that a node runs for hours (the landing gear's response, the deck flexure,
+the ship's track) appends one row per sample and reads back rows near the newest (the IMU
+increments between the previous sample and this one). Keeping every row would grow with the
+run; `RecentRows` keeps the rows from the oldest a reader may still ask for: `forget_before(k)`
+lets the rows below k go, and their memory is reused (the live rows are moved down once the
+dead ones fill half the buffer, so a stream of any length holds about twice what is live). A
+batch run that appends everything before reading forgets nothing and reads any row."""
+from __future__ import annotations
+
+import numpy as np
+
+
+class RecentRows:
+    """Rows (width,) at sample indices 0, 1, ...: appended in order, read back by index."""
+
+    def __init__(self, width: int, capacity: int = 1024) -> None:
+        self._a = np.empty((capacity, width))
+        self._base = 0          # the sample index of self._a[0]
+        self._keep = 0          # rows below this index are forgotten
+        self.n = 0              # rows appended (indices 0 .. n - 1)
+
+    def append(self, row: np.ndarray) -> None:
+        if self.n - self._base == len(self._a):
+            self._make_room()
+        self._a[self.n - self._base] = row
+        self.n += 1
+
+    def _make_room(self) -> None:
+        dead = self._keep - self._base
+        if dead >= len(self._a) // 2:
+            live = self._a[dead:self.n - self._base]
+            self._a[:len(live)] = live
+            self._base = self._keep
+        else:
+            self._a = np.concatenate([self._a, np.empty_like(self._a)])
+
+    def forget_before(self, k: int) -> None:
+        """Rows below index k are no longer read (a later read of one raises)."""
+        self._keep = max(self._keep, min(int(k), self.n))
+
+    def __getitem__(self, k) -> np.ndarray:
+        """The rows at indices k (an int or an integer array, any shape): (..., width)."""
+        k = np.asarray(k, dtype=np.int64)
+        if k.size:
+            lo, hi = int(k.min()), int(k.max())
+            if lo < self._keep or hi >= self.n:
+                raise IndexError(f'row {lo if lo < self._keep else hi} is not kept: rows {self._keep} .. '
+                                 f'{self.n - 1} are (older ones were forgotten, newer not yet made)')
+        return self._a[k - self._base]

@@ -1,0 +1,52 @@
+"""RecentRows: rows by sample index, appended in order, read back near the newest; the rows a
+reader let go are forgotten and their memory reused, so a stream of any length holds a bounded
+buffer, while a batch that reads everything keeps everything."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core import pipeline
+from alignment_core.config import scenario
+from alignment_core.recent_rows import RecentRows
+
+
+def test_rows_read_back_by_index_until_forgotten():
+    r = RecentRows(2, capacity=4)
+    for k in range(10):
+        r.append(np.array([k, -k], dtype=float))
+    np.testing.assert_array_equal(r[np.array([0, 9, 3])], [[0, 0], [9, -9], [3, -3]])
+    np.testing.assert_array_equal(r[5], [5, -5])
+    r.forget_before(6)
+    np.testing.assert_array_equal(r[np.arange(6, 10)][:, 0], [6, 7, 8, 9])
+    with pytest.raises(IndexError, match='row 5 is not kept'):
+        r[5]
+    with pytest.raises(IndexError, match='row 10 is not kept'):
+        r[10]
+
+
+def test_a_stream_holds_a_bounded_buffer_and_its_values_survive_the_moves():
+    r = RecentRows(3, capacity=8)
+    for k in range(100_000):
+        r.forget_before(k - 5)                     # a reader that needs the last five rows
+        r.append(np.full(3, float(k)))
+        if k >= 5:
+            np.testing.assert_array_equal(r[np.arange(k - 5, k + 1)][:, 1], np.arange(k - 5, k + 1))
+    assert len(r._a) <= 16                          # twice the live rows, rounded up to the doubling
+
+
+def test_the_carriers_gear_flexure_and_track_hold_bounded_histories_in_a_long_stepped_run():
+    """The slave's stage stepped in node-sized chunks for 10 minutes of the default carrier
+    keeps a few hundred samples of the gear and the flexure (not the run's 60 000), and the
+    ship's track a few thousand grid steps."""
+    sc = scenario.load('deck', {'duration_s': 600.0})
+    src = pipeline.ship_source(sc)
+    stage = pipeline.SlaveImuStage(sc)
+    n = sc.n_samples
+    for k in range(0, n, 50):
+        ks = np.arange(k, min(k + 50, n))
+        stage.step_many(src.samples((ks * sc.dt_ns) / 1e9, sc.t0_ns, sc.dt_ns, k0=k))
+    gear = stage.kin.gear.response
+    assert gear.n == n and len(gear._q._a) <= 1024
+    assert len(stage.kin.flex._th._a) <= 1024
+    assert src.track._steps * src.track.h >= 600.0 and len(src.track._coef._a) <= 8192
