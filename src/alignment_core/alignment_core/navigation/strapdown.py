@@ -15,7 +15,6 @@ import numpy as np
 
 from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import (
-    cross_f,
     floats,
     normalized_f,
     quat_mul_f,
@@ -27,6 +26,8 @@ from alignment_core.geometry.rotations import (
 # Speed: the per-step work is on 3-vectors and quaternions, where one numpy operation costs
 # ~1 us of call overhead against ~30 ns for a Python float operation: the update works on plain
 # floats (the float forms of geometry/rotations.py) and builds arrays only for what callers keep.
+
+_ndarray = np.ndarray
 
 
 @dataclass
@@ -64,22 +65,22 @@ class Strapdown:
         q_nb and v_n are replaced by new arrays, never changed in place (the engine's
         history keeps references to the old ones)."""
         s = self.s
-        th = floats(dtheta)
-        dvl = floats(dv)
-        pth = floats(s.prev_dtheta)
+        t0, t1, t2 = dtheta.tolist() if type(dtheta) is _ndarray else floats(dtheta)
+        d0, d1, d2 = dv.tolist() if type(dv) is _ndarray else floats(dv)
+        p0, p1, p2 = floats(s.prev_dtheta)
+        u0, u1, u2 = floats(s.prev_dv)
+        # the cross products written out (cross_f's expressions: the calls cost more than the arithmetic)
         # coning: phi = dtheta + prev_dtheta x dtheta / 12
-        c = cross_f(pth, th)
-        phi_x, phi_y, phi_z = th[0] + c[0] / 12.0, th[1] + c[1] / 12.0, th[2] + c[2] / 12.0
+        phi_x = t0 + (p1 * t2 - p2 * t1) / 12.0
+        phi_y = t1 + (p2 * t0 - p0 * t2) / 12.0
+        phi_z = t2 + (p0 * t1 - p1 * t0) / 12.0
         # rotation compensation and sculling:
         # dv_b = dv + rot / 2 + dtheta x rot / 6 + (prev_dtheta x dv + prev_dv x dtheta) / 12,
         # rot = dtheta x dv
-        rot = cross_f(th, dvl)
-        rr = cross_f(th, rot)
-        s1 = cross_f(pth, dvl)
-        s2 = cross_f(floats(s.prev_dv), th)
-        bx = dvl[0] + 0.5 * rot[0] + rr[0] / 6.0 + (s1[0] + s2[0]) / 12.0
-        by = dvl[1] + 0.5 * rot[1] + rr[1] / 6.0 + (s1[1] + s2[1]) / 12.0
-        bz = dvl[2] + 0.5 * rot[2] + rr[2] / 6.0 + (s1[2] + s2[2]) / 12.0
+        r0, r1, r2 = t1 * d2 - t2 * d1, t2 * d0 - t0 * d2, t0 * d1 - t1 * d0
+        bx = d0 + 0.5 * r0 + (t1 * r2 - t2 * r1) / 6.0 + ((p1 * d2 - p2 * d1) + (u1 * t2 - u2 * t1)) / 12.0
+        by = d1 + 0.5 * r1 + (t2 * r0 - t0 * r2) / 6.0 + ((p2 * d0 - p0 * d2) + (u2 * t0 - u0 * t2)) / 12.0
+        bz = d2 + 0.5 * r2 + (t0 * r1 - t1 * r0) / 6.0 + ((p0 * d1 - p1 * d0) + (u0 * t1 - u1 * t0)) / 12.0
         q0 = floats(s.q_nb)
         cnb = quat_to_dcm_f(q0)
         self.c_start = np.array(cnb).reshape(3, 3)
@@ -91,10 +92,10 @@ class Strapdown:
         lat0, h0 = s.lat, s.h
         # predictor at the start of the interval: v1 = v0 + dv_sf + (g^n - (2 w_ie + w_en) x v0) h
         r_m, r_n, ien, ieu, ene, enn, enu, g = earth.local_terms(lat0, h0, v0x, v0y)
-        cor = cross_f((ene, 2.0 * ien + enn, 2.0 * ieu + enu), (v0x, v0y, v0z))
-        v1x = v0x + fx + (0.0 - cor[0]) * h
-        v1y = v0y + fy + (0.0 - cor[1]) * h
-        v1z = v0z + fz + (-g - cor[2]) * h
+        w0, w1, w2 = ene, 2.0 * ien + enn, 2.0 * ieu + enu
+        v1x = v0x + fx + (0.0 - (w1 * v0z - w2 * v0y)) * h
+        v1y = v0y + fy + (0.0 - (w2 * v0x - w0 * v0z)) * h
+        v1z = v0z + fz + (-g - (w0 * v0y - w1 * v0x)) * h
         vmx, vmy, vmz = 0.5 * (v0x + v1x), 0.5 * (v0y + v1y), 0.5 * (v0z + v1z)
         lat_m = lat0 + 0.5 * h * vmy / (r_m + h0)
         h_m = h0 + 0.5 * h * vmz
@@ -104,12 +105,13 @@ class Strapdown:
         self.w_en = np.array([ene, enn, enu])
         # nav-frame rotation zeta = (w_ie + w_en) h; dv_n = dv_sf - zeta x dv_sf / 2
         zx, zy, zz = ene * h, (ien + enn) * h, (ieu + enu) * h
-        zf = cross_f((zx, zy, zz), (fx, fy, fz))
-        dnx, dny, dnz = fx - 0.5 * zf[0], fy - 0.5 * zf[1], fz - 0.5 * zf[2]
-        cor = cross_f((ene, 2.0 * ien + enn, 2.0 * ieu + enu), (vmx, vmy, vmz))
-        vx = v0x + dnx + (0.0 - cor[0]) * h
-        vy = v0y + dny + (0.0 - cor[1]) * h
-        vz = v0z + dnz + (-g - cor[2]) * h
+        dnx = fx - 0.5 * (zy * fz - zz * fy)
+        dny = fy - 0.5 * (zz * fx - zx * fz)
+        dnz = fz - 0.5 * (zx * fy - zy * fx)
+        w0, w1, w2 = ene, 2.0 * ien + enn, 2.0 * ieu + enu
+        vx = v0x + dnx + (0.0 - (w1 * vmz - w2 * vmy)) * h
+        vy = v0y + dny + (0.0 - (w2 * vmx - w0 * vmz)) * h
+        vz = v0z + dnz + (-g - (w0 * vmy - w1 * vmx)) * h
         vmx, vmy, vmz = 0.5 * (v0x + vx), 0.5 * (v0y + vy), 0.5 * (v0z + vz)
         s.lat = lat0 + h * vmy / (r_m + h_m)
         s.lon = s.lon + h * vmx / ((r_n + h_m) * math.cos(lat_m))
