@@ -20,6 +20,8 @@ from collections import deque
 
 import numpy as np
 
+from alignment_core.geometry.rotations import cross_f, floats
+
 MIN_FILL = 0.8
 """The fit is used once its samples span this fraction of the window (None before)."""
 
@@ -37,10 +39,13 @@ class SpotAcceleration:
         self._samples: deque[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = deque()   # t, C_m, v_b, w_b
         self._r = np.zeros(3)
         self._value: np.ndarray | None = None
+        self._rows: dict[int, np.ndarray] = {}       # t -> the spot's velocity with the arm _rows_r
+        self._rows_r = b''
 
     def clear(self) -> None:
         """Forget the samples (a gap): no value until the window refills."""
         self._samples.clear()
+        self._rows.clear()
         self._value = None
 
     def add(self, t_ns: int, c_m: np.ndarray, v_b: np.ndarray, w_b: np.ndarray, r: np.ndarray) -> None:
@@ -51,7 +56,7 @@ class SpotAcceleration:
         self._samples.append((t_ns, c_m, v_b, w_b))
         self._r = np.asarray(r, dtype=float)
         while t_ns - self._samples[0][0] > self._window_ns:
-            self._samples.popleft()
+            self._rows.pop(self._samples.popleft()[0], None)
         self._value = None
 
     def acceleration(self) -> np.ndarray | None:
@@ -64,7 +69,14 @@ class SpotAcceleration:
             return None
         t_end, r = s[-1][0], self._r
         tau = np.array([(t - t_end) * 1e-9 for t, _, _, _ in s])
-        v = np.array([c @ (vb + np.cross(wb, r)) for _, c, vb, wb in s])
+        if r.tobytes() != self._rows_r:             # each row depends on the newest arm: recomputed when it moves
+            self._rows.clear()
+            self._rows_r = r.tobytes()
+        rows = self._rows
+        for t, c, vb, wb in s:
+            if t not in rows:
+                rows[t] = c @ (vb + np.array(cross_f(floats(wb), floats(r))))
+        v = np.array([rows[t] for t, _, _, _ in s])
         a = np.column_stack([np.ones_like(tau), tau, tau * tau])
         coef, *_ = np.linalg.lstsq(a, v, rcond=None)
         self._value = coef[1]
@@ -76,5 +88,5 @@ def reference_specific_force(f_slave_n: np.ndarray, a_spot_n: np.ndarray, v_n: n
     """(3,) the specific force for the error model: the slave's vertical, the horizontal (E, N)
     from the spot's acceleration plus the Coriolis and transport terms (ENU: gravity is vertical)."""
     f = np.array(f_slave_n, dtype=float)
-    f[0:2] = (a_spot_n + np.cross(2.0 * w_ie + w_en, v_n))[0:2]
+    f[0:2] = (a_spot_n + np.array(cross_f(floats(2.0 * w_ie + w_en), floats(v_n))))[0:2]
     return f
