@@ -138,7 +138,7 @@ class WaveFrequencyOnTrack:
     CHUNK = 256
     KNOT_S = 0.1              # knot spacing of the sampled response (s)
     BLOCK = 256               # knots per cached block
-    CACHE = 64                # blocks kept
+    CACHE = 4                 # blocks kept (a run read forward needs two at a time)
 
     def __init__(self, comps: wave_spectrum.WaveComponents, rao_fn, courses, heading_span,
                  scale: float = 1.0, heave: bool = True, track=None) -> None:
