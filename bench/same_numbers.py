@@ -18,7 +18,8 @@ import numpy as np
 from alignment_core import pipeline
 from alignment_core.config import scenario
 
-CASES = [('deck_paper', 1), ('deck_paper', 7), ('catapult_paper', 1), ('catapult_paper', 3), ('catapult', 1), ('deck', 1)]
+CASES = [('deck_paper', 1), ('deck_paper', 7), ('catapult_paper', 1), ('catapult_paper', 3), ('catapult', 1),
+         ('deck', 1)]
 SKIP = {'report', 'flags', 'fading'}
 
 
