@@ -136,8 +136,9 @@ class ManoeuvringTrack:
         self._y = y                                   # state at the last knot
         self._f = self.rhs(0.0, y)                    # its derivative
         self._steps = 0                               # grid steps integrated (knots 0 .. steps)
-        self._coef = RecentRows(4 * 6)                # quintic coefficients (4, 6) per step
-        self._lon_knots = RecentRows(1)               # longitude at each knot
+        room = 2 * (KEEP + 2 * BLOCK)                 # twice the most a forward run holds: no growth later
+        self._coef = RecentRows(4 * 6, room)          # quintic coefficients (4, 6) per step
+        self._lon_knots = RecentRows(1, room)         # longitude at each knot
         self._lon_knots.append(np.array([lon0]))
 
     def _revs_for(self, speed: float) -> float:
