@@ -40,10 +40,5 @@ def check_health(x: np.ndarray, p: np.ndarray) -> None:
     (a Cholesky of every P would cost more than the update; a negative or non-finite
     variance is how single-precision breakdowns show first)."""
     d = p.diagonal()                # the method: np.diagonal's wrapper costs more than the check
-    if type(x) is np.ndarray and x.ndim == 1 and x.size <= 16 and d.dtype == np.float64:
-        dl = d.tolist()                 # finite(x, d) and min(d) > 0 on one list of floats
-        if math.isfinite(sum(x.tolist()) + sum(dl)) and min(dl) > 0.0:
-            return
-    elif finite(x, d) and float(_min(d)) > 0.0:
-        return
-    raise NumericalBreakdownError('covariance not positive definite or not finite')
+    if not (finite(x, d) and float(_min(d)) > 0.0):
+        raise NumericalBreakdownError('covariance not positive definite or not finite')

@@ -66,14 +66,9 @@ class MatchResults:
     Doppler update, and the corrections fed back outside the strapdown (sensor biases, lever arm);
     the rows of the last update (its NIS's degrees of freedom) and, from the last accepted master
     update, the master attitude and the corrected slave attitude at its validity time (the
-    relative attitude a bridged gap carries the slave across with).
-
-    Speed: `mu` and `mu_sigma` are computed when first read (the outputs read them at the output
-    rate, the matches come at the master's), from what the last master update left: its state
-    and covariance (filters replace x and P, never change them in place), the match, and copies
-    of the slave solution and the corrections, which feedback and the strapdown change later."""
-    _mu: np.ndarray
-    _mu_sigma: np.ndarray
+    relative attitude a bridged gap carries the slave across with)."""
+    mu: np.ndarray
+    mu_sigma: np.ndarray
     x: np.ndarray
     nis: float = math.nan
     t_doppler_update: int | None = None
@@ -83,33 +78,6 @@ class MatchResults:
     innovation: np.ndarray | None = None   # the last accepted master update's innovation and its
     innovation_cov: np.ndarray | None = None   # covariance S (innovation whiteness)
     t_mu: int | None = None                # the validity time of `mu`: its master update's (None: none yet)
-    _later: tuple[ErrorModel, np.ndarray, np.ndarray, Match, NavState, Corrections] | None = None
-
-    def misalignment_from(self, model: ErrorModel, x: np.ndarray, p: np.ndarray, match: Match,
-                          nav: NavState) -> None:
-        """`mu`, `mu_sigma` become model.misalignment(x, p, match, nav, corr) of now, computed when read."""
-        c = self.corr
-        self._later = (model, x, p, match,
-                       NavState(nav.q_nb, nav.v_n, nav.lat, nav.lon, nav.h, nav.prev_dtheta, nav.prev_dv),
-                       Corrections(c.bg, c.ba, c.dr, c.mu))
-
-    def _settle(self) -> None:
-        assert self._later is not None
-        model, x, p, match, nav, corr = self._later
-        self._later = None
-        self._mu, self._mu_sigma = model.misalignment(x, p, match, nav, corr)
-
-    @property
-    def mu(self) -> np.ndarray:
-        if self._later is not None:
-            self._settle()
-        return self._mu
-
-    @property
-    def mu_sigma(self) -> np.ndarray:
-        if self._later is not None:
-            self._settle()
-        return self._mu_sigma
 
 
 def _interval_containing(intervals: deque[tuple[int, float, np.ndarray, np.ndarray]], t_v: int
@@ -155,7 +123,7 @@ class Matcher:
         self._intervals: deque[tuple[int, float, np.ndarray, np.ndarray]] = deque(
             maxlen=int(span_ns / (1e9 / imu_rate_hz)) + 8)      # (t_end, h, raw gyro rate, dv_n)
         self._prev_master: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None   # t_v, C_m, v_b, w_b
-        self.results = MatchResults(_mu=np.zeros(3), _mu_sigma=np.full(3, cfg.init_attitude_sigma_deg * DEG),
+        self.results = MatchResults(mu=np.zeros(3), mu_sigma=np.full(3, cfg.init_attitude_sigma_deg * DEG),
                                     x=np.zeros(model.n))
 
     def use_rigid_noise(self) -> None:
@@ -313,7 +281,7 @@ class Matcher:
         x_new, nav = self._feed_back(live, x, p, match, nav)
         kf.x = x_new
         res.anchor = (ref.c_m, nav.q_nb)
-        res.misalignment_from(self._model, x_new, p, match, nav)
+        res.mu, res.mu_sigma = self._model.misalignment(x_new, p, match, nav, res.corr)
         res.t_mu = t_v
 
     def update_doppler(self, live: LiveSolution, t: int, s: DopplerSample, past: Past) -> None:

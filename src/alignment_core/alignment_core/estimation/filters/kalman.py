@@ -8,7 +8,6 @@ from alignment_core.estimation.filters.base import Counters, UpdateResult, as_dt
 __all__ = ['KalmanFilter', 'UpdateResult']
 
 _dot = np.dot
-_ndarray = np.ndarray
 _count_nonzero = np.count_nonzero
 _INF = float('inf')
 
@@ -52,10 +51,9 @@ class KalmanFilter(Counters):
         """x <- Phi x, P <- Phi P Phi^T + Qd (symmetric by construction up to round-off, which
         the next update's symmetrisation removes)."""
         dt = self.dtype
-        if not (type(phi) is _ndarray and type(qd) is _ndarray and phi.dtype == dt and qd.dtype == dt):
-            phi, qd = as_dtype(phi, dt), as_dtype(qd, dt)
+        phi = as_dtype(phi, dt)
         self.x = _dot(phi, self.x)
-        self.P = _dot(_dot(phi, self.P), phi.T) + qd
+        self.P = _dot(_dot(phi, self.P), phi.T) + as_dtype(qd, dt)
         self.n_predicts += 1
 
     def _selection(self, h: np.ndarray) -> np.ndarray | None:
@@ -87,9 +85,7 @@ class KalmanFilter(Counters):
     def update(self, z: np.ndarray, h: np.ndarray, r: np.ndarray,
                gate_chi2: float | None = None) -> UpdateResult:
         dt = self.dtype
-        if not (type(z) is _ndarray and type(h) is _ndarray and type(r) is _ndarray
-                and z.dtype == dt and h.dtype == dt and r.dtype == dt):     # as_dtype, inlined
-            z, h, r = as_dtype(z, dt), as_dtype(h, dt), as_dtype(r, dt)
+        z, h, r = as_dtype(z, dt), as_dtype(h, dt), as_dtype(r, dt)
         x, p = self.x, self.P
         # inlined _innovation (this is the hot path of the whole pipeline)
         sel = self._selection(h)
