@@ -32,7 +32,20 @@ def test_a_stream_holds_a_bounded_buffer_and_its_values_survive_the_moves():
         r.append(np.full(3, float(k)))
         if k >= 5:
             np.testing.assert_array_equal(r[np.arange(k - 5, k + 1)][:, 1], np.arange(k - 5, k + 1))
-    assert len(r._a) <= 16                          # twice the live rows, rounded up to the doubling
+    assert r.capacity <= 16                          # twice the live rows, rounded up to the doubling
+
+
+def test_blocks_of_rows_append_as_rows_do():
+    a, b = RecentRows(2, capacity=4), RecentRows(2, capacity=4)
+    rows = np.arange(2 * 300, dtype=float).reshape(300, 2)
+    for k0 in range(0, 300, 37):
+        a.forget_before(k0 - 10)
+        b.forget_before(k0 - 10)
+        a.extend(rows[k0:k0 + 37])
+        for row in rows[k0:k0 + 37]:
+            b.append(row)
+        np.testing.assert_array_equal(a[np.arange(max(0, k0 - 10), a.n)], rows[max(0, k0 - 10):a.n])
+    assert a.n == b.n == 300 and a.capacity <= 128
 
 
 def test_the_carriers_gear_flexure_and_track_hold_bounded_histories_in_a_long_stepped_run():
@@ -47,6 +60,6 @@ def test_the_carriers_gear_flexure_and_track_hold_bounded_histories_in_a_long_st
         ks = np.arange(k, min(k + 50, n))
         stage.step_many(src.samples((ks * sc.dt_ns) / 1e9, sc.t0_ns, sc.dt_ns, k0=k))
     gear = stage.kin.gear.response
-    assert gear.n == n and len(gear._q._a) <= 1024
-    assert len(stage.kin.flex._th._a) <= 1024
-    assert src.track._steps * src.track.h >= 600.0 and len(src.track._coef._a) <= 8192
+    assert gear.n == n and gear._q.capacity <= 1024
+    assert stage.kin.flex._th.capacity <= 1024
+    assert src.track._steps * src.track.h >= 600.0 and src.track._coef.capacity <= 8192

@@ -21,19 +21,34 @@ class RecentRows:
         self._keep = 0          # rows below this index are forgotten
         self.n = 0              # rows appended (indices 0 .. n - 1)
 
+    @property
+    def capacity(self) -> int:
+        """Rows the buffer holds (live, forgotten not yet reused, and free)."""
+        return len(self._a)
+
     def append(self, row: np.ndarray) -> None:
         if self.n - self._base == len(self._a):
-            self._make_room()
+            self._make_room(1)
         self._a[self.n - self._base] = row
         self.n += 1
 
-    def _make_room(self) -> None:
+    def extend(self, rows: np.ndarray) -> None:
+        """Append rows (m, width) in order."""
+        m = len(rows)
+        if self.n - self._base + m > len(self._a):
+            self._make_room(m)
+        self._a[self.n - self._base:self.n - self._base + m] = rows
+        self.n += m
+
+    def _make_room(self, m: int) -> None:
+        """Room for m more rows: the live rows moved down over the dead ones when those fill half
+        the buffer, else the buffer doubled (until m fit)."""
         dead = self._keep - self._base
         if dead >= len(self._a) // 2:
             live = self._a[dead:self.n - self._base]
             self._a[:len(live)] = live
             self._base = self._keep
-        else:
+        while self.n - self._base + m > len(self._a):
             self._a = np.concatenate([self._a, np.empty_like(self._a)])
 
     def forget_before(self, k: int) -> None:

@@ -20,7 +20,7 @@ from collections import deque
 
 import numpy as np
 
-from alignment_core.geometry.rotations import cross_f, floats
+from alignment_core.geometry.rotations import cross3
 
 MIN_FILL = 0.8
 """The fit is used once its samples span this fraction of the window (None before)."""
@@ -75,7 +75,7 @@ class SpotAcceleration:
         rows = self._rows
         for t, c, vb, wb in s:
             if t not in rows:
-                rows[t] = c @ (vb + np.array(cross_f(floats(wb), floats(r))))
+                rows[t] = c @ (vb + cross3(wb, r))
         v = np.array([rows[t] for t, _, _, _ in s])
         a = np.column_stack([np.ones_like(tau), tau, tau * tau])
         coef, *_ = np.linalg.lstsq(a, v, rcond=None)
@@ -88,5 +88,5 @@ def reference_specific_force(f_slave_n: np.ndarray, a_spot_n: np.ndarray, v_n: n
     """(3,) the specific force for the error model: the slave's vertical, the horizontal (E, N)
     from the spot's acceleration plus the Coriolis and transport terms (ENU: gravity is vertical)."""
     f = np.array(f_slave_n, dtype=float)
-    f[0:2] = (a_spot_n + np.array(cross_f(floats(2.0 * w_ie + w_en), floats(v_n))))[0:2]
+    f[0:2] = (a_spot_n + cross3(2.0 * w_ie + w_en, v_n))[0:2]
     return f

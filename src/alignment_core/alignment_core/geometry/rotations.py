@@ -250,11 +250,16 @@ def quat_to_dcm_batch(q: np.ndarray) -> np.ndarray:
     return m.reshape(q.shape[:-1] + (3, 3))
 
 
+def rotate_rows(c: np.ndarray, v: np.ndarray, inverse: bool = False) -> np.ndarray:
+    """C v (or C^T v) for K matrices (K, 3, 3) and vectors (K, 3), each row alone: the same bits
+    for a row whatever K (scipy's Rotation.apply rounds a batch differently from its rows, so a
+    sensor fed in chunks would depend on where they split)."""
+    return np.einsum('kji,kj->ki' if inverse else 'kij,kj->ki', c, v)
+
+
 def rotate_batch(q: np.ndarray, v: np.ndarray, inverse: bool = False) -> np.ndarray:
-    """C(q) v (or C(q)^T v) for K quaternions (K, 4) and vectors (K, 3), each row alone: the
-    same bits for a row whatever K (scipy's Rotation.apply rounds a batch differently from its
-    rows, so a sensor fed in chunks would depend on where they split)."""
-    return np.einsum('kji,kj->ki' if inverse else 'kij,kj->ki', quat_to_dcm_batch(np.asarray(q)), v)
+    """`rotate_rows` by the matrices of K quaternions (K, 4)."""
+    return rotate_rows(quat_to_dcm_batch(np.asarray(q)), v, inverse)
 
 
 def quat_to_dcm_f(q: Floats) -> tuple[float, ...]:

@@ -27,8 +27,6 @@ from alignment_core.geometry.rotations import (
 # ~1 us of call overhead against ~30 ns for a Python float operation: the update works on plain
 # floats (the float forms of geometry/rotations.py) and builds arrays only for what callers keep.
 
-_ndarray = np.ndarray
-
 
 @dataclass
 class NavState:
@@ -65,8 +63,8 @@ class Strapdown:
         q_nb and v_n are replaced by new arrays, never changed in place (the engine's
         history keeps references to the old ones)."""
         s = self.s
-        t0, t1, t2 = dtheta.tolist() if type(dtheta) is _ndarray else floats(dtheta)
-        d0, d1, d2 = dv.tolist() if type(dv) is _ndarray else floats(dv)
+        t0, t1, t2 = floats(dtheta)
+        d0, d1, d2 = floats(dv)
         p0, p1, p2 = floats(s.prev_dtheta)
         u0, u1, u2 = floats(s.prev_dv)
         # the cross products written out (cross_f's expressions: the calls cost more than the arithmetic)

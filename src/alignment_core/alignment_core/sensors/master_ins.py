@@ -43,6 +43,7 @@ from scipy.linalg import expm, solve_continuous_lyapunov
 from scipy.spatial.transform import Rotation
 
 from alignment_core.geometry import earth
+from alignment_core.geometry.rotations import rotate_rows
 from alignment_core.rng import stage_rng
 from alignment_core.samples import MasterSample, ShipBatch, ShipSample
 from alignment_core.sensors.timing import SensorTiming
@@ -230,7 +231,7 @@ class MasterInsModel:
         noise = self.rng.standard_normal((len(sb), 3)) * self.cfg.velocity_noise_mps
         if self.t_change_ns is not None:
             noise[sb.t_ns >= self.t_change_ns] *= self.cfg.noise_change_factor
-        v_n = np.einsum('kij,kj->ki', c_true.as_matrix(), sb.v_b) + noise     # row by row (rotate_batch)
+        v_n = rotate_rows(c_true.as_matrix(), sb.v_b) + noise
         if self.schuler is None:
             c_est = self.err_rot * c_true
             self.last_phi = np.broadcast_to(self.phi, (len(sb), 3)).copy()
@@ -242,7 +243,7 @@ class MasterInsModel:
             v_n = v_n + self.last_dv
             c_est = Rotation.from_rotvec(-self.last_phi) * c_true
         q = c_est.as_quat()
-        v_b = np.einsum('kji,kj->ki', c_est.as_matrix(), v_n)
+        v_b = rotate_rows(c_est.as_matrix(), v_n, inverse=True)
         w_b = sb.w_b + self.gyro_bias_b
         return [MasterSample(t_ns=int(sb.t_ns[k]), p_w=sb.p_w[k].copy(), q_nb=q[k], v_b=v_b[k],
                              w_b=w_b[k]) for k in range(len(sb))]

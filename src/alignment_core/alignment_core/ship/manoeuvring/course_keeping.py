@@ -40,8 +40,8 @@ WARMUP_S = 600.0
 SHAFT_LAG_S = 20.0
 BLOCK = 1024
 KEEP = 2 * BLOCK
-"""Grid steps before the least time of a read that stay readable (recent_rows.py; the spectral
-motion's knot blocks reach back that far at most)."""
+"""Grid steps before the least time of a read that stay readable (recent_rows.py): far more than
+the spectral motion's knot blocks (25.6 s) reach back before the times a node asks for."""
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _GL_U = 0.5 * (_GL_X + 1.0)                   # nodes on [0, 1]
@@ -179,16 +179,14 @@ class ManoeuvringTrack:
         y1, f1 = np.asarray(ys), np.asarray(fs)
         ch0, ch1 = self._channels(y0, f0), self._channels(y1, f1)
         coef = quintic_coefficients(*ch0, *ch1, h)     # (n, 4, 6)
-        for c in coef:
-            self._coef.append(c.ravel())
+        self._coef.extend(coef.reshape(n, 4 * 6))
         # longitude at the new knots
         nodes = _GL_U[None, :]
         north = quintic_values(coef[:, None, 0], nodes, h, 0)[0]
         e_dot = quintic_values(coef[:, None, 1], nodes, h, 1)[1]
         q = self._q(north)
         inc = h * np.sum(q * e_dot * _GL_WU, axis=1)
-        for lon in self._lon_knots[self._lon_knots.n - 1][0] + np.cumsum(inc):
-            self._lon_knots.append(np.array([lon]))
+        self._lon_knots.extend((self._lon_knots[self._lon_knots.n - 1][0] + np.cumsum(inc))[:, None])
 
     def _channels(self, y, f):
         """(value, first, second derivative), each (n, 4), of north, east, psi, phi (north
