@@ -89,6 +89,18 @@ def test_recorder_waited_for_every_published_message(graph_run):
         assert st['held_unsent'] == {}, f.name
 
 
+def test_the_ship_kept_its_lead_over_the_filter_and_the_recorder(graph_run):
+    """The ship paced itself on the filter's output and the recorder's progress, and never had
+    to go on without them: when it sent its last sample (at the end, 13 s, or later) both were
+    within its lead (5 s) of it."""
+    ship = json.loads((graph_run / 'stats' / 'ship_motion_node.json').read_text())
+    rec = json.loads((graph_run / 'stats' / 'recorder.json').read_text())
+    assert ship['pace_releases'] == 0
+    assert rec['progress_published'] > 0
+    for topic in ('/alignment/misalignment', '/recorder/progress'):
+        assert ship['paced_on'][topic] >= 8.0e9, topic
+
+
 def test_bag_reads_with_independent_reader(graph_run):
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory

@@ -62,8 +62,10 @@ MATCHED = {
 }
 # the ship runs at most its lead ahead of these (alignment_ros.pacing): of the slave's truth (the
 # LDV pairs it with the ship's odometry and would buffer the ship's for as long as the slave lags)
-# and of the filter's output (the slowest consumer: every queue upstream of it holds at most the lead)
-PACE_TOPICS = (topics.TRUTH_AIRCRAFT_ODOM, topics.ALIGN_MISALIGNMENT)
+# of the filter's output (the slowest consumer: every queue upstream of it holds at most the lead)
+# and of the recorder's progress (the one consumer of every stream: its queues and the writers'
+# histories it has not acknowledged hold at most the lead too)
+PACE_TOPICS = (topics.TRUTH_AIRCRAFT_ODOM, topics.ALIGN_MISALIGNMENT, topics.RECORDER_PROGRESS)
 MAX_LEAD_S = 5.0
 NODES = ('alignment_filter_node', 'ldv_node', 'slave_ins_node', 'master_ins_node')
 AIR_DATA_TOPICS = (*topics.FADS_PORT_TOPICS, topics.AIR_DATA_VELOCITY, topics.AIR_DATA_STATIC_PRESSURE,
@@ -228,7 +230,8 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
     try:
         matched = matched_of(sc)
         expect = out / 'stats' / 'published.json'
-        rec = start_recorder(run, out / 'bag', end_s, recorded_of(sc), end_topics_of(sc), expect_counts=expect)
+        rec = start_recorder(run, out / 'bag', end_s, recorded_of(sc), end_topics_of(sc), expect_counts=expect,
+                             progress_topic=topics.RECORDER_PROGRESS)
         end_reached = watch_end_time(rec, live.recorded)
         live.start()
         for n in nodes_of(sc):

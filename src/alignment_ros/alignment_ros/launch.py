@@ -203,7 +203,7 @@ def _status(rc: int | None) -> str:
 
 
 def start_recorder(run: Run, bag: Path, end_time_s: float, topic_list, wait_topics,
-                   expect_counts: Path | None = None) -> subprocess.Popen:
+                   expect_counts: Path | None = None, progress_topic: str | None = None) -> subprocess.Popen:
     """Start the recorder (no idle timeout: the run decides when it ends) and wait for its
     ``ready`` line. With expect_counts it records, after end-time, until every topic has the
     count that file gives (see :func:`finish_recording`)."""
@@ -212,6 +212,8 @@ def start_recorder(run: Run, bag: Path, end_time_s: float, topic_list, wait_topi
            '--output', str(bag), '--node-name', 'recorder', '--idle-timeout', '0',
            '--end-time', repr(end_time_s), '--stats', str(out / 'stats' / 'recorder.json'),
            '--topics', *topic_list, '--wait-topics', *wait_topics, '--quiet', '--progress-lines']
+    if progress_topic is not None:
+        cmd += ['--progress-topic', progress_topic]
     if expect_counts is not None:
         cmd += ['--expect-counts', str(expect_counts),
                 '--expect-timeout', repr(RECORDER_EXPECT_TIMEOUT_S)]

@@ -134,6 +134,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument('--quiet', action='store_true',
                    help='no progress line on stderr (simulation time, messages, rate)')
     g.add_argument('--progress-lines', action='store_true', help=argparse.SUPPRESS)  # launchers
+    g.add_argument('--progress-topic', metavar='TOPIC',
+                   help='publish the time every --wait-topics stream has reached (rosgraph_msgs/Clock, '
+                        'best effort; never recorded), for a source that paces itself on the recorder')
     return p
 
 
@@ -185,6 +188,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     missing = [t for t in a.wait_topics if not a.filter.discovers() and t not in a.filter.topics]
     if missing:
         p.error(f'--wait-topics not recorded: {", ".join(missing)}')
+    if a.progress_topic is not None and not a.wait_topics:
+        p.error('--progress-topic needs --wait-topics (the streams whose progress it publishes)')
+    if a.progress_topic is not None:
+        if a.progress_topic in a.filter.topics:
+            p.error(f'{a.progress_topic}: the recorder cannot record its own --progress-topic')
+        a.filter.exclude_topics.append(a.progress_topic)
     if a.expect_counts is not None and a.end_time is None:
         p.error('--expect-counts needs --end-time')
     return a

@@ -33,11 +33,9 @@ them (``publishers``: topic -> {node: how many distinct publishers it had there}
 can tell a message from a publisher that is not one of its run's.
 
 While a topic is short of its expected count the recorder also takes from its subscription
-directly, so a message that reached the reader is never left behind. It then closes the bag
-(the rest of the reorder buffer, the file's summary, metadata.yaml) and writes ``--stats``
-(``reorder``: the reorder buffer's peak and the messages it released late, see
-:mod:`alignment_ros.bag_reorder`). It prints ``recorder ready`` (one flushed
-stdout line) once the first subscriptions exist.
+directly (nothing that reached a reader is left behind), then closes the bag and writes
+``--stats`` (``reorder``: see :mod:`alignment_ros.bag_reorder`). It prints ``recorder ready``
+once the first subscriptions exist. ``--progress-topic``: :mod:`alignment_ros.record_progress`.
 """
 from __future__ import annotations
 
@@ -63,6 +61,7 @@ from alignment_ros.heap import release_free_heap
 from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.record_options import TopicFilter, parse_args
+from alignment_ros.record_progress import ProgressPublisher
 from alignment_ros.topics import CLOCK, msg_class
 
 from .signals import stop_on_signals
@@ -262,7 +261,7 @@ def make_executor(kind: str) -> Any:
 
 
 def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str, bool],
-          progress: Progress) -> tuple[str, dict[str, int] | None]:
+          progress: Progress, reached: ProgressPublisher | None) -> tuple[str, dict[str, int] | None]:
     """Spin until an end condition; return (end reason, expected counts)."""
     interval = max(args.polling_interval, 1) / 1000.0
     discovering = not args.no_discovery and (args.filter.discovers() or rec.pending_topics())
@@ -273,6 +272,8 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str
     expected: dict[str, int] | None = None
     while True:
         executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+        if reached is not None:
+            reached.poll()
         if stop['signal']:
             rec.take_pending(list(rec.subscriptions))   # delivered before the signal: keep it
             return 'signal', expected
@@ -344,6 +345,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     reason = 'error'
     expected: dict[str, int] | None = None
     rec: Recorder | None = None
+    reached: ProgressPublisher | None = None
     try:
         rec = Recorder(node, writer, args.typed, args.end_time, args.wait_topics,
                        topic_filter=args.filter, use_sim_time=args.use_sim_time)
@@ -351,7 +353,9 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         rec.discover()
         print('recorder ready', flush=True)
         progress = Progress('record', None, quiet=args.quiet)
-        reason, expected = _loop(args, rec, executor, stop, progress)
+        if args.progress_topic is not None:
+            reached = ProgressPublisher(node, args.progress_topic, args.wait_topics, rec.last_stamp_ns)
+        reason, expected = _loop(args, rec, executor, stop, progress, reached)
         t_ns = _reached_ns(rec)
         progress.close(t_ns / NS if t_ns else None, sum(rec.counts.values()))
     finally:
@@ -376,6 +380,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         'last_stamp_ns': rec.last_stamp_ns,
         'publishers': rec.publishers(),
         'executor': args.executor,
+        'progress_published': reached.published if reached is not None else 0,
         'receive_span_s': span,
         'receive_rate_msg_s': total / span if span > 0 else None,
         'reorder': {'peak_bytes': writer.reorder.peak_bytes,

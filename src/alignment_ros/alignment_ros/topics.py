@@ -31,6 +31,7 @@ TRUTH_WIND = '/truth/wind'
 AIR_DATA_TOPICS = (*FADS_PORT_TOPICS, AIR_DATA_VELOCITY, AIR_DATA_STATIC_PRESSURE, AIR_DATA_TOTAL_PRESSURE,
                    AIR_DATA_WIND, AIR_DATA_STATE, TRUTH_AIR_DATA_STATE, TRUTH_WIND)
 REFERENCE_INS_ODOM = '/reference_ins/odom'   # a reference INS (scenarios without a deck phase)
+RECORDER_PROGRESS = '/recorder/progress'   # what the run's recorder has taken (never recorded)
 
 # topic -> ROS type name (package/msg/Type), as stored in bags
 TOPIC_TYPES: dict[str, str] = {
@@ -62,6 +63,9 @@ TOPIC_TYPES: dict[str, str] = {
     TRUTH_WIND: 'geometry_msgs/msg/Vector3Stamped',
     REFERENCE_INS_ODOM: 'nav_msgs/msg/Odometry',
 }
+
+# the streams the ship may pace itself on: the interface's, and the recorder's progress
+PACEABLE_TYPES: dict[str, str] = {**TOPIC_TYPES, RECORDER_PROGRESS: 'rosgraph_msgs/msg/Clock'}
 
 # what a replay feeds into a fresh filter
 SENSOR_TOPICS = (CLOCK, MASTER_ODOM, AIRCRAFT_IMU, LDV_TWIST)

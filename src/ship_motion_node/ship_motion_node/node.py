@@ -67,14 +67,15 @@ class ShipMotionNode(node_util.CountingNode):
         """Best-effort, latest-only subscriptions to the paced streams (they hold nothing back)."""
         if not names:
             return None
-        unknown = [t for t in names if t not in topics.TOPIC_TYPES or stamp_reader(topics.TOPIC_TYPES[t]) is None]
+        types = topics.PACEABLE_TYPES
+        unknown = [t for t in names if t not in types or stamp_reader(types[t]) is None]
         if unknown:
             raise ConfigError(f'pace_topics: not stamped topics of the graph: {unknown}')
         lead = LeadLimit(names, round(self.get_parameter('max_lead_s').value * 1e9), self.sc.t0_ns,
                          release_s=self.get_parameter('pace_release_s').value)
         for t in names:
-            read = stamp_reader(topics.TOPIC_TYPES[t])
-            self.create_subscription(topics.msg_class(topics.TOPIC_TYPES[t]), t,
+            read = stamp_reader(types[t])
+            self.create_subscription(topics.msg_class(types[t]), t,
                                      lambda data, t=t, read=read: lead.note(t, read(data)), qos.WATCH, raw=True)
         return lead
 
@@ -98,7 +99,8 @@ class ShipMotionNode(node_util.CountingNode):
 
     def stats(self) -> dict:
         return {**super().stats(), 'pace_waits': self.pace_waits, 'pace_wait_s': round(self.pace_wait_s, 3),
-                'pace_releases': self.lead.releases if self.lead is not None else 0}
+                'pace_releases': self.lead.releases if self.lead is not None else 0,
+                'paced_on': dict(self.lead.latest) if self.lead is not None else {}}
 
     def _check(self, params) -> SetParametersResult:
         for p in params:
