@@ -21,7 +21,7 @@ from rclpy.node import Node
 from alignment_core.validation import ConfigError
 
 from . import params, qos
-from .heap import release_free_heap
+from .heap import map_large_allocations, release_free_heap
 from .signals import stop_on_signals
 
 RCLError = rclpy_implementation.RCLError
@@ -193,6 +193,7 @@ def run(node_factory, spin: bool = True) -> None:
 
     The EventsExecutor dispatches several times faster than the wait-set executors; it is
     spun from the main thread only (it runs no callbacks from a background thread)."""
+    map_large_allocations()
     try:
         rclpy.init(args=sys.argv)
     except RCLError as e:              # a -p rule rcl cannot parse

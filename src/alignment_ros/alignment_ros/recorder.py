@@ -57,7 +57,7 @@ from rclpy.utilities import remove_ros_args
 
 from alignment_ros.bag import BagError, BagWriter, stamp_reader
 from alignment_ros.bag_qos import adapted_qos, endpoints_hash, qos_dict
-from alignment_ros.heap import release_free_heap
+from alignment_ros.heap import map_large_allocations, release_free_heap
 from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.record_options import TopicFilter, parse_args
@@ -337,6 +337,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     writer = BagWriter(args.output, max_bag_duration_s=args.max_bag_duration,
                        max_bag_size=args.max_bag_size, compression_mode=args.compression_mode,
                        compression_format=args.compression_format, custom_data=args.custom_data)
+    map_large_allocations()
     rclpy.init(args=ros_argv, signal_handler_options=SignalHandlerOptions.NO)
     stop = stop_on_signals()
     node = Node(args.node_name, parameter_overrides=[
