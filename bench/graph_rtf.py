@@ -8,6 +8,8 @@ message), the whole-run RTF including start-up, and lost messages (must be 0).
 Batch: the same scenario in-process; simulation stages, filter alone, and whole pipeline.
 Peer: filterpy's KalmanFilter doing the same 12-state predict + 3-measurement update, so
 the filter's per-step cost is read as a ratio against a well-known implementation.
+Each graph run also gives its start-up (from the command to the first message recorded) and
+each node's CPU time per simulated minute (the nodes' stats).
 """
 from __future__ import annotations
 
@@ -30,16 +32,18 @@ ROOT = Path(__file__).resolve().parents[1]
 def graph(rtf: float) -> dict:
     with tempfile.TemporaryDirectory() as d:
         out = Path(d) / 'run'
-        p = subprocess.run([str(ROOT / 'scripts/run_graph.sh'), '--out', str(out),
+        p = subprocess.run([str(ROOT / 'scripts/run_graph.sh'), '--out', str(out), '--no-plots',
                             '--real-time-factor', str(rtf)], capture_output=True, text=True)
         if p.returncode != 0:
             raise RuntimeError(p.stderr)
         s = json.loads((out / 'summary.json').read_text())
         rec = json.loads((out / 'stats' / 'recorder.json').read_text())
         span = rec.get('receive_span_s') or s['wall_time_s']
+        cpu = {f.stem: json.loads(f.read_text()).get('cpu_s') for f in sorted((out / 'stats').glob('*_node.json'))}
         return {'rtf_setting': rtf, 'streaming_rtf': s['sim_time_s'] / span,
                 'whole_run_rtf': s['real_time_factor'], 'lost': s['lost_total'],
-                'messages': sum(s['topics'].values())}
+                'messages': sum(s['topics'].values()), 'startup_s': s.get('startup_s'),
+                'sim_time_s': s['sim_time_s'], 'cpu_s': cpu}
 
 
 def batch(repeat: int) -> dict:
@@ -99,7 +103,10 @@ def main() -> None:
     for rtf in a.rtf:
         g = graph(rtf)
         print(f"graph at real_time_factor {rtf:g}: streaming RTF {g['streaming_rtf']:.2f}, "
-              f"whole run incl. start-up {g['whole_run_rtf']:.2f}, {g['messages']} messages, lost {g['lost']}")
+              f"whole run incl. start-up {g['whole_run_rtf']:.2f}, first message {g['startup_s']:.2f} s "
+              f"after the command, {g['messages']} messages, lost {g['lost']}")
+        print('  CPU s per simulated minute: ' + ', '.join(
+            f"{n} {c * 60.0 / g['sim_time_s']:.1f}" for n, c in g['cpu_s'].items() if c is not None))
 
 
 if __name__ == '__main__':

@@ -7,6 +7,7 @@
 # failed, the bag repaired); 130/143 stopped by SIGINT/SIGTERM (every process stopped, bag
 # closed); 2 bad arguments. No process of the run outlives it.
 set -euo pipefail
+export ALIGNMENT_COMMAND_START_NS="${ALIGNMENT_COMMAND_START_NS:-$(date +%s%N)}"   # start-up is timed from here
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$ROOT/scripts/setup.sh"
 . "$ROOT/scripts/env.sh"

@@ -21,6 +21,7 @@ The processes of a run never outlive it (:mod:`alignment_ros.launch`).
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
 import time
@@ -184,7 +185,14 @@ def main(argv: list[str] | None = None) -> int:
     return guarded_main('run_graph', _main, parse_args(argv))
 
 
+def _command_start() -> float:
+    """When the user's command started (run_graph.sh exports it), else now (Unix seconds)."""
+    ns = os.environ.get('ALIGNMENT_COMMAND_START_NS', '')
+    return int(ns) * 1e-9 if ns.isdigit() else time.time()
+
+
 def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
+    started = _command_start()
     try:
         given = core_scenario.given_data(a.scenario, core_scenario.parse_overrides(a.sets), a.seed)
         sc = core_scenario.resolve(given)
@@ -206,7 +214,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
     live = LiveProgress('run_graph', sc.duration_s, sc.start_time_s, quiet=a.quiet)
     wall = _run(run, a, sc, params, live)
     run.end(out / 'bag')
-    s = _summary(run, sc, wall)
+    s = _summary(run, sc, wall, started)
     live.close(s if run.interrupted is None else None)
     if not a.no_plots and run.interrupted is None:
         run_report.write(out, s)
@@ -272,9 +280,9 @@ def _short_of_the_end(stats: dict, end_topics: tuple[str, ...], end_s: float) ->
             f'{stats.get("taken_directly", "unknown")}')
 
 
-def _summary(run: Run, sc: core_scenario.Scenario, wall: float) -> dict | None:
+def _summary(run: Run, sc: core_scenario.Scenario, wall: float, started: float) -> dict | None:
     """Write summary.json (for a cut run too: complete false); return it, or None if there is
-    no bag to read."""
+    no bag to read. ``startup_s``: from the command's start to the first message recorded."""
     bag = run.out / 'bag'
     ours = {n for n in run.procs if n != 'recorder'}
     if run.failure is not None and run.failure.startswith('run did not finish'):
@@ -295,6 +303,8 @@ def _summary(run: Run, sc: core_scenario.Scenario, wall: float) -> dict | None:
         return None
     s['scenario'] = sc.name
     s['seed'] = sc.seed
+    first = run.recorder_stats().get('first_message_unix_s')
+    s['startup_s'] = None if first is None else first - started
     summary.write(s, run.out)
     return s
 

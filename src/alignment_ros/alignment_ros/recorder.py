@@ -108,6 +108,7 @@ class Recorder:
         self.clock_ns: int | None = None
         self.max_stamp_ns = 0
         self.first_rx: float | None = None
+        self.first_rx_unix: float | None = None    # wall clock, for a launcher's start-up time
         self.last_rx: float | None = None
         self.taken_directly = 0  # messages taken by take_pending() rather than by the executor
         self.subscriptions: dict[str, Any] = {}
@@ -211,7 +212,7 @@ class Recorder:
                     self.reached.add(topic)
             self.last_rx = time.monotonic()
             if self.first_rx is None:
-                self.first_rx = self.last_rx
+                self.first_rx, self.first_rx_unix = self.last_rx, time.time()
 
         return on_message
 
@@ -383,6 +384,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         'executor': args.executor,
         'progress_published': reached.published if reached is not None else 0,
         'receive_span_s': span,
+        'first_message_unix_s': rec.first_rx_unix,
         'receive_rate_msg_s': total / span if span > 0 else None,
         'reorder': {'peak_bytes': writer.reorder.peak_bytes,
                     'peak_messages': writer.reorder.peak_messages, 'late': writer.reorder.late},

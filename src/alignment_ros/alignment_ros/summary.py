@@ -308,7 +308,8 @@ def table(s: dict) -> str:
     lines.append(f"sim time {s['sim_time_s']:.2f} s"
                  + (f" of {planned:.2f} s" if s['sim_time_s'] < planned else '')
                  + f", wall time {s['wall_time_s']:.2f} s"
-                 + (f", real-time factor {rtf:.2f}" if rtf else ''))
+                 + (f", real-time factor {rtf:.2f}" if rtf else '')
+                 + (f", first message {s['startup_s']:.2f} s after the command" if s.get('startup_s') else ''))
     lines.append('messages recorded (lost):')
     foreign = s.get('foreign', {})
     for k, v in sorted(s['topics'].items()):
