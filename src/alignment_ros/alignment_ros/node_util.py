@@ -74,10 +74,19 @@ class CountingNode(Node):
                 self._need[topic] = int(n)
         self._held: dict[str, list] = {}
         self._all_acked: bool | None = None   # set by wait_acked()
+        self._next_trim = time.monotonic() + TRIM_INTERVAL_S
         if self._need:
             # held messages go out as soon as their subscribers match, even when nothing else
             # is sent any more (a steady clock: simulation time may have stopped)
             self.create_timer(0.05, self.flush_held, clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    def release_heap_if_due(self) -> None:
+        """Hand freed heap back to the OS every TRIM_INTERVAL_S (a spinning node's loop calls it;
+        a node that runs its own loop, the ship, calls it from there)."""
+        now = time.monotonic()
+        if now >= self._next_trim:
+            release_free_heap()
+            self._next_trim = now + TRIM_INTERVAL_S
 
     def stream_publisher(self, msg_type, topic: str):
         pub = self.create_publisher(msg_type, topic, qos.STREAM)
@@ -213,12 +222,9 @@ def run(node_factory, spin: bool = True) -> None:
     node.executor_ref = executor
     try:
         if spin:
-            next_trim = time.monotonic() + TRIM_INTERVAL_S
             while rclpy.ok() and not stop['signal']:
                 executor.spin_once(timeout_sec=0.1)
-                if time.monotonic() >= next_trim:
-                    release_free_heap()
-                    next_trim = time.monotonic() + TRIM_INTERVAL_S
+                node.release_heap_if_due()
         else:
             node.run(lambda: stop['signal'])
     finally:

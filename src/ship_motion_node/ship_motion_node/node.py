@@ -91,6 +91,7 @@ class ShipMotionNode(node_util.CountingNode):
         while self.lead.holding(t_ns, w0) and not stop():
             self.flush_held()        # what waits for its subscribers to match may be what is awaited
             self.executor_ref.spin_once(timeout_sec=0.01)
+            self.release_heap_if_due()
         self.pace_wait_s += time.monotonic() - w0
         if self.lead.releases > released:
             self.get_logger().warning(
@@ -169,6 +170,7 @@ class ShipMotionNode(node_util.CountingNode):
                     time.sleep(lag)
             if k % 50 == 0:
                 self.executor_ref.spin_once(timeout_sec=0.0)
+                self.release_heap_if_due()
         self.wait_acked(30.0)
         self.get_logger().info(f'done: {dict(self.published)}')
 
