@@ -2,11 +2,13 @@
 while it runs and its slope fitted against simulated time (target: < 1 MiB per simulated hour).
 
     scripts/bench.sh soak_memory [--scenario deck] [--duration-s 3600] [--rtf 5] [--every-s 5] [--set KEY=VALUE ...]
+    scripts/bench.sh soak_memory --analyse SOAK.json     (the slopes of a saved run's samples)
 
 Simulated time is read from the run's /clock (a best-effort subscriber of depth 1 on the run's
-domain: it holds nothing back). The slope is fitted over the second half of the simulated run
+domain: it holds nothing back). The slopes are fitted over the second half of the simulated run
 (the first half holds the start-up: imports, DDS discovery, the first allocations, the bag's
-reorder buffer filling up to the streams' lag)."""
+reorder buffer filling up to the streams' lag): through every sample, through 5-minute medians
+and through 5-minute minima (see `fits`)."""
 from __future__ import annotations
 
 import argparse
@@ -75,6 +77,47 @@ def clock_reader(domain: int):
     return (lambda timeout: rclpy.spin_once(node, timeout_sec=timeout)), (lambda: now[-1] if now else None)
 
 
+WINDOW_S = 300.0
+
+
+def fits(t: np.ndarray, r: np.ndarray) -> tuple[float, float, float]:
+    """MiB per simulated hour over the second half of the run (samples taken before the
+    simulation's end only): the fit through every sample; through the median of each 300 s
+    window (a node whose buffers fill and drain, the recorder's reorder buffer and its trims,
+    saws up and down by megabytes); and through each window's minimum, the floor a leak raises
+    (the ship's transient block arrays and the sawtooth's peaks left out)."""
+    half = t >= t[0] + (t[-1] - t[0]) / 2
+    th, rh = t[half], r[half]
+    every = float(np.polyfit(th, rh, 1)[0] * 3600.0)
+    win = np.floor(th / WINDOW_S)
+    keys = np.unique(win)
+    if len(keys) < 3:
+        return every, float('nan'), float('nan')
+    tw = np.array([th[win == k].mean() for k in keys])
+    med = np.array([np.median(rh[win == k]) for k in keys])
+    low = np.array([rh[win == k].min() for k in keys])
+    return every, float(np.polyfit(tw, med, 1)[0] * 3600.0), float(np.polyfit(tw, low, 1)[0] * 3600.0)
+
+
+def report(samples: list) -> dict[str, dict[str, float]]:
+    """Print and return each node's start and end RSS and its three slopes (see fits)."""
+    end = max((sim for _, sim, _ in samples), default=0.0)
+    print(f"{'node':<24}{'RSS start MiB':>14}{'RSS end MiB':>12}{'slope MiB/h (sim)':>19}"
+          f"{'5-min medians':>15}{'5-min floors':>14}")
+    out: dict[str, dict[str, float]] = {'slopes_mib_per_h': {}, 'median_slopes_mib_per_h': {},
+                                        'floor_slopes_mib_per_h': {}}
+    for n in NODES:
+        pts = [(sim, s[n]) for _, sim, s in samples if n in s and sim < end]
+        if len(pts) < 4:
+            continue
+        t, r = np.array(pts).T
+        every, med, low = fits(t, r)
+        out['slopes_mib_per_h'][n], out['median_slopes_mib_per_h'][n], out['floor_slopes_mib_per_h'][n] = \
+            every, med, low
+        print(f'{n:<24}{r[0]:>14.1f}{r[-1]:>12.1f}{every:>19.2f}{med:>15.2f}{low:>14.2f}')
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     ap.add_argument('--scenario', default='deck')
@@ -85,7 +128,12 @@ def main() -> int:
     ap.add_argument('--keep', type=Path, default=None, help='run directory (default: a temporary one)')
     ap.add_argument('--json', type=Path, default=None, help='write the samples and slopes here')
     ap.add_argument('--progress', action='store_true', help='print each sample (JSON) as it is taken')
+    ap.add_argument('--analyse', type=Path, default=None, metavar='JSON',
+                    help="no run: print the slopes of a --json file's samples")
     a = ap.parse_args()
+    if a.analyse is not None:
+        report(json.loads(a.analyse.read_text())['samples'])
+        return 0
     out = a.keep or Path(tempfile.mkdtemp(prefix='soak-')) / 'run'
     cmd = [str(ROOT / 'scripts/run_graph.sh'), '--scenario', a.scenario, '--out', str(out),
            '--real-time-factor', str(a.rtf), '--set', f'duration_s={a.duration_s}']
@@ -123,24 +171,9 @@ def main() -> int:
           f'output {out}')
     if p.returncode != 0:
         print(log[-2000:])
-    print(f"{'node':<24}{'RSS start MiB':>14}{'RSS end MiB':>12}{'slope MiB/h (sim)':>19}{'5-min medians':>15}")
-    slopes, median_slopes = {}, {}
-    for n in NODES:
-        pts = [(sim, s[n]) for _, sim, s in samples if n in s]
-        if len(pts) < 4:
-            continue
-        t, r = np.array(pts).T
-        half = t >= t[0] + (t[-1] - t[0]) / 2
-        slopes[n] = float(np.polyfit(t[half], r[half], 1)[0] * 3600.0)
-        # the same fit through the median of each 300 s window: a node whose buffers fill and
-        # drain (the recorder's reorder buffer, its trims) saws up and down by megabytes
-        win = np.floor(t[half] / 300.0)
-        med = np.array([(t[half][win == k].mean(), np.median(r[half][win == k])) for k in np.unique(win)])
-        median_slopes[n] = float(np.polyfit(med[:, 0], med[:, 1], 1)[0] * 3600.0) if len(med) >= 3 else float('nan')
-        print(f'{n:<24}{r[0]:>14.1f}{r[-1]:>12.1f}{slopes[n]:>19.2f}{median_slopes[n]:>15.2f}')
+    fits = report(samples)
     if a.json:
-        a.json.write_text(json.dumps({'slopes_mib_per_h': slopes, 'median_slopes_mib_per_h': median_slopes,
-                                      'summary_complete': summary.get('complete'),
+        a.json.write_text(json.dumps({**fits, 'summary_complete': summary.get('complete'),
                                       'lost_total': summary.get('lost_total'), 'reorder': reorder,
                                       'samples': samples}, indent=1))
     return 0 if p.returncode == 0 else 1
