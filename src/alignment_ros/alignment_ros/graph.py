@@ -32,7 +32,7 @@ import yaml
 from alignment_core.config import scenario as core_scenario
 from alignment_core.validation import ConfigError
 
-from . import run_report, summary, topics
+from . import summary, topics
 from .bag import BagError
 from .launch import (
     OneLineParser,
@@ -217,6 +217,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
     s = _summary(run, sc, wall, started)
     live.close(s if run.interrupted is None else None)
     if not a.no_plots and run.interrupted is None:
+        from . import run_report  # matplotlib, scipy.stats: loaded for the report, not at start-up
         run_report.write(out, s)
     if run.interrupted is not None:
         print(run.stopped_line(s), file=sys.stderr)

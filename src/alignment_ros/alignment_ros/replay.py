@@ -40,7 +40,7 @@ from alignment_core.config import scenario as core_scenario
 from alignment_core.estimation.models import DOPPLER_MODELS
 from alignment_core.validation import ConfigError
 
-from . import bag_reindex, replay_params, run_report, summary, topics
+from . import bag_reindex, replay_params, summary, topics
 from .bag import BagError, BagReader
 from .graph import start
 from .launch import (
@@ -201,6 +201,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
                        'replayed_from': str(bag)}, out)
     live.close(s if run.interrupted is None else None)
     if not a.no_plots and run.interrupted is None:
+        from . import run_report  # matplotlib, scipy.stats: loaded for the report, not at start-up
         run_report.write(out, s, input_bag=bag)
     if run.interrupted is not None:
         print(run.stopped_line(s), file=sys.stderr)

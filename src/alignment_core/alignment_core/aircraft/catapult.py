@@ -27,10 +27,12 @@ grid, so no sample interval straddles a change of the acceleration's formula.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator, PPoly
+
+if TYPE_CHECKING:
+    from scipy.interpolate import PPoly
 
 from alignment_core.units import G0
 from alignment_core.validation import ConfigError, build, require
@@ -115,6 +117,8 @@ def acceleration_profile(cat: CatapultConfig) -> PPoly | None:
     A, T = cat.accel_g * G0, cat.stroke_s
     if cat.profile == 'constant':
         return None
+    # scipy.interpolate (and scipy.optimize with it): ~0.3 s of every node's start-up otherwise
+    from scipy.interpolate import PchipInterpolator, PPoly
     if cat.profile == 'knots':
         return PchipInterpolator(np.asarray(cat.knot_time_s), np.asarray(cat.knot_accel_g) * G0,
                                  extrapolate=True)
