@@ -59,6 +59,7 @@ class ShipMotionNode(node_util.CountingNode):
         self.stream_publisher(Odometry, topics.SHIP_ODOM)
         self.stream_publisher(AccelStamped, topics.SHIP_ACCEL)
         self.stream_publisher(NavSatFix, topics.SHIP_FIX)
+        self._watchers: dict[str, object] = {}
         self.lead = self._watch([t for t in self.get_parameter('pace_topics').value if t])
         self.pace_waits = 0
         self.pace_wait_s = 0.0
@@ -75,7 +76,7 @@ class ShipMotionNode(node_util.CountingNode):
                          release_s=self.get_parameter('pace_release_s').value)
         for t in names:
             read = stamp_reader(types[t])
-            self.create_subscription(topics.msg_class(types[t]), t,
+            self._watchers[t] = self.create_subscription(topics.msg_class(types[t]), t,
                                      lambda data, t=t, read=read: lead.note(t, read(data)), qos.WATCH, raw=True)
         return lead
 
@@ -120,6 +121,10 @@ class ShipMotionNode(node_util.CountingNode):
         deadline = time.monotonic() + self.get_parameter('wait_timeout_s').value
         while not stop():
             missing = [(t, n) for t, n in wants if self._subscribers(t) < n]
+            # and every paced stream's publisher matched with its watcher: a publisher that holds
+            # its messages until the watcher has matched (hold_until_matched) would otherwise wait
+            # for a ship that has finished a short run and gone
+            missing += [(t, 1) for t, sub in self._watchers.items() if sub.get_publisher_count() < 1]
             if not missing:
                 time.sleep(0.5)   # let the matched endpoints finish their handshakes
                 return True
