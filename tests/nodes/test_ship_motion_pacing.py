@@ -111,3 +111,30 @@ def spin_for(node, seconds: float) -> None:
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         rclpy.spin_once(node, timeout_sec=0.05)
+
+
+def test_the_ship_stays_until_a_paced_stream_is_heard(ros):
+    """A run shorter than the lead never waits on its paced streams; a publisher holding its
+    first messages until the ship's watcher has matched it would hold them for ever if the ship
+    left at its last sample. The ship stays until each paced stream has sent something."""
+    node, start = ros
+    sc = scenario.load('catapult_paper', {'duration_s': 1.0})
+    got: list[float] = []
+    sub = node.create_subscription(Clock, topics.CLOCK, lambda m: got.append(convert.to_ns(m.clock) * 1e-9),
+                                   qos.STREAM)
+    paced = node.create_publisher(Odometry, topics.TRUTH_AIRCRAFT_ODOM, qos.STREAM)
+    proc = start('ship_motion_node', '-p', f'wait_subscribers:=["{topics.CLOCK}:1","{GO}:1"]',
+                 '-p', f'pace_topics:=["{topics.TRUTH_AIRCRAFT_ODOM}"]', '-p', 'max_lead_s:=5.0',
+                 '-p', 'pace_release_s:=60.0', sets={'real_time_factor': 0.0, 'duration_s': 1.0})
+    spin_until(node, lambda: sub.get_publisher_count() >= 1 and paced.get_subscription_count() >= 1)
+    node.create_subscription(Empty, GO, lambda m: None, qos.STREAM)
+    spin_until(node, lambda: got and got[-1] >= (sc.t0_ns + sc.n_samples * sc.dt_ns) * 1e-9 - 0.011)
+    spin_for(node, 2.0)
+    assert proc.poll() is None                  # every sample sent, the stream silent: still there
+    m = Odometry()
+    m.header.stamp = convert.stamp(sc.t0_ns)
+    paced.publish(m)
+    end = time.monotonic() + 30.0
+    while proc.poll() is None and time.monotonic() < end:
+        spin_for(node, 0.1)
+    assert proc.poll() == 0                     # heard: the ship finishes

@@ -47,6 +47,10 @@ class LeadLimit:
         floor = t_ns - self.max_lead_ns
         return [t for t, last in self.latest.items() if (self.t0_ns if last is None else last) < floor]
 
+    def unheard(self) -> list[str]:
+        """The watched streams that have sent nothing yet."""
+        return [t for t, last in self.latest.items() if last is None]
+
     def holding(self, t_ns: int, waiting_since: float) -> list[str]:
         """The streams behind t_ns the sample still waits for: a stream silent for release_s
         (counted from its last advance or from `waiting_since`, the wall time the wait began,

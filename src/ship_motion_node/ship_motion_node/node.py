@@ -176,8 +176,23 @@ class ShipMotionNode(node_util.CountingNode):
             if k % 50 == 0:
                 self.executor_ref.spin_once(timeout_sec=0.0)
                 self.release_heap_if_due()
+        self._hear_paced_streams(stop)
         self.wait_acked(30.0)
         self.get_logger().info(f'done: {dict(self.published)}')
+
+    def _hear_paced_streams(self, stop) -> None:
+        """Stay until every paced stream has been heard (or was silent for pace_release_s). Its
+        publisher may hold its first messages until this node's watcher has matched it (the
+        graph counts the watcher in hold_until_matched); on a run shorter than the lead the ship
+        never waited on them, and leaving at once could leave them held for ever."""
+        if self.lead is None:
+            return
+        w0 = time.monotonic()
+        while self.lead.unheard() and not stop() and time.monotonic() - w0 < self.lead.release_s:
+            self.flush_held()
+            self.executor_ref.spin_once(timeout_sec=0.01)
+        if self.lead.unheard():
+            self.get_logger().warning(f'paced streams never heard: {self.lead.unheard()}')
 
 
 def main() -> None:
