@@ -101,6 +101,36 @@ def test_spot_acceleration_takes_the_lever_arm_of_the_newest_sample():
     assert err < 0.1 * w ** 4 * np.linalg.norm(r[:2]) * 1.1
 
 
+def test_spot_acceleration_over_a_long_run_with_a_moving_arm_and_a_gap():
+    # the turning ship of the test above for 30 s of 50 Hz samples (the window slides, its buffer
+    # is compacted and grown many times over), the arm moving at every sample for 15 s then fixed
+    # (rows recomputed, then only the new ones), a gap (clear) at 12 s: at every sample once the
+    # window is full, the centripetal acceleration of the newest arm within the quadratic fit's
+    # truncation (above); None for 0.8 s of samples after the gap
+    w, window = 0.05, 1.0
+    acc = SpotAcceleration(window)
+    last_clear = 0.0
+    checked = 0
+    for k in range(1501):
+        t = 0.02 * k
+        if k == 600:
+            acc.clear()
+            last_clear = t
+        c, s = np.cos(w * t), np.sin(w * t)
+        c_m = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        r = np.array([40.0 + 0.01 * min(k, 750), -10.0, 15.0])
+        acc.add(int(round(t * 1e9)), c_m, np.zeros(3), np.array([0.0, 0.0, w]), r)
+        got = acc.acceleration()
+        if t - last_clear < 0.8 * window - 1e-9:
+            assert got is None
+            continue
+        assert got is not None
+        expected = c_m @ np.cross([0.0, 0.0, w], np.cross([0.0, 0.0, w], r))
+        assert np.linalg.norm(got - expected) < 0.1 * w ** 4 * np.linalg.norm(r[:2]) * 1.1
+        checked += 1
+    assert checked > 1300
+
+
 def _vector_ldv_delay(acceleration: str) -> tuple[float, float]:
     """deck with a vector LDV, the aircraft on its gear (the LDV flags it creeping, so the
     delay's column is taken as moving), 30 ms of master latency not told: the delay estimate and

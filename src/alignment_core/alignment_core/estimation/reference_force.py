@@ -16,11 +16,9 @@ of noise, 5e-3 m/s^2 RMS in all at sea state 5, against g x the slave's tilt err
 """
 from __future__ import annotations
 
-from collections import deque
-
 import numpy as np
 
-from alignment_core.geometry.rotations import cross3
+from alignment_core.geometry.rotations import cross, cross3
 
 MIN_FILL = 0.8
 """The fit is used once its samples span this fraction of the window (None before)."""
@@ -30,33 +28,60 @@ class SpotAcceleration:
     """Causal estimate of the deck spot's nav-frame acceleration (3,) m/s^2 from the master
     samples (module docstring): the spot's velocity C_m (v_m + w_m x r) of every sample in the
     window, with the newest sample's lever arm r (the master's part of the reference: the LDV's
-    relative velocity is not the spot's), fitted by a quadratic in time."""
+    relative velocity is not the spot's), fitted by a quadratic in time.
+
+    The window's samples live in arrays (rows [start, end) of a buffer that doubles when full):
+    the velocity rows of the whole window are one stacked product, recomputed when the arm moves
+    (a filter estimating the arm moves it at every update), else only for the new samples."""
 
     def __init__(self, window_s: float) -> None:
         if not window_s > 0.0:
             raise ValueError(f'window_s must be > 0, got {window_s}')
         self._window_ns = int(round(window_s * 1e9))
-        self._samples: deque[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = deque()   # t, C_m, v_b, w_b
+        self._t = np.zeros(0, dtype=np.int64)        # (cap,) ns
+        self._c = np.zeros((0, 3, 3))                # (cap, 3, 3) nav <- ship
+        self._vw = np.zeros((0, 2, 3))               # (cap, 2, 3) velocity and body rate, ship axes
+        self._rows = np.zeros((0, 3))                # (cap, 3) the spot's velocity with the arm _rows_r
+        self._start = self._end = self._rows_end = 0
         self._r = np.zeros(3)
-        self._value: np.ndarray | None = None
-        self._rows: dict[int, np.ndarray] = {}       # t -> the spot's velocity with the arm _rows_r
         self._rows_r = b''
+        self._value: np.ndarray | None = None
 
     def clear(self) -> None:
         """Forget the samples (a gap): no value until the window refills."""
-        self._samples.clear()
-        self._rows.clear()
+        self._start = self._end = self._rows_end = 0
         self._value = None
+
+    def _make_room(self) -> None:
+        """Move the window to the buffer's start, doubling the buffer if the window fills it."""
+        s, e = self._start, self._end
+        n = e - s
+        cap = max(64, 2 * n) if n >= len(self._t) // 2 else len(self._t)
+        for name in ('_t', '_c', '_vw', '_rows'):
+            old = getattr(self, name)
+            new = old if cap == len(old) else np.zeros((cap,) + old.shape[1:], dtype=old.dtype)
+            new[:n] = old[s:e]
+            setattr(self, name, new)
+        self._rows_end = max(self._rows_end - s, 0)
+        self._start, self._end = 0, n
 
     def add(self, t_ns: int, c_m: np.ndarray, v_b: np.ndarray, w_b: np.ndarray, r: np.ndarray) -> None:
         """One master sample valid at t_ns (increasing times; an older or equal one is ignored):
         attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m."""
-        if self._samples and t_ns <= self._samples[-1][0]:
+        if self._end > self._start and t_ns <= self._t[self._end - 1]:
             return
-        self._samples.append((t_ns, c_m, v_b, w_b))
+        if self._end == len(self._t):
+            self._make_room()
+        k = self._end
+        self._t[k] = t_ns
+        self._c[k] = c_m
+        self._vw[k, 0] = v_b
+        self._vw[k, 1] = w_b
+        self._end = k + 1
         self._r = np.asarray(r, dtype=float)
-        while t_ns - self._samples[0][0] > self._window_ns:
-            self._rows.pop(self._samples.popleft()[0], None)
+        t = self._t
+        while t_ns - int(t[self._start]) > self._window_ns:
+            self._start += 1
         self._value = None
 
     def acceleration(self) -> np.ndarray | None:
@@ -64,21 +89,22 @@ class SpotAcceleration:
         of the window (or are fewer than four)."""
         if self._value is not None:
             return self._value
-        s = self._samples
-        if len(s) < 4 or s[-1][0] - s[0][0] < MIN_FILL * self._window_ns:
+        s, e = self._start, self._end
+        if e - s < 4 or int(self._t[e - 1]) - int(self._t[s]) < MIN_FILL * self._window_ns:
             return None
-        t_end, r = s[-1][0], self._r
-        tau = np.array([(t - t_end) * 1e-9 for t, _, _, _ in s])
+        r = self._r
         if r.tobytes() != self._rows_r:             # each row depends on the newest arm: recomputed when it moves
-            self._rows.clear()
             self._rows_r = r.tobytes()
-        rows = self._rows
-        for t, c, vb, wb in s:
-            if t not in rows:
-                rows[t] = c @ (vb + cross3(wb, r))
-        v = np.array([rows[t] for t, _, _, _ in s])
+            self._rows_end = s
+        k = max(self._rows_end, s)
+        if k < e:
+            vw = self._vw[k:e]
+            x = vw[:, 0] + cross(vw[:, 1], r)
+            self._rows[k:e] = np.matmul(self._c[k:e], x[:, :, None])[:, :, 0]
+            self._rows_end = e
+        tau = (self._t[s:e] - self._t[e - 1]) * 1e-9
         a = np.column_stack([np.ones_like(tau), tau, tau * tau])
-        coef, *_ = np.linalg.lstsq(a, v, rcond=None)
+        coef, *_ = np.linalg.lstsq(a, self._rows[s:e], rcond=None)
         self._value = coef[1]
         return self._value
 
