@@ -55,6 +55,13 @@ export PYTHONUNBUFFERED=1
 # one BLAS thread: the matrices are small, and a multithreaded BLAS sums in another order and moves
 # the last bits (experiments and their published digests must not depend on the machine's cores)
 export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1
+# and one set of BLAS kernels: OpenBLAS picks its kernels by CPU model, and each rounds its own way
+# (on this project's AMD EPYC machines, its own pick moves the experiments' last bits off the
+# published digests, computed with the Haswell kernels); any CPU with AVX2 and FMA runs those, so
+# they are chosen there unless the caller set OPENBLAS_CORETYPE
+if [ -z "\${OPENBLAS_CORETYPE:-}" ] && grep -qw avx2 /proc/cpuinfo 2>/dev/null && grep -qw fma /proc/cpuinfo; then
+  export OPENBLAS_CORETYPE=Haswell
+fi
 if [ -f "$ROOT/ros2_ws/install/setup.bash" ]; then
   _u=\$(set +o | grep nounset); set +u
   . "$ROOT/ros2_ws/install/setup.bash"
