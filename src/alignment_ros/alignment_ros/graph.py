@@ -52,15 +52,22 @@ from .progress_watch import LiveProgress
 from .shm_cleanup import clean_stale
 from .signals import Interrupted, SignalGuard
 
-# matched subscriptions (recorder included) each node waits for before it sends on a topic
-MATCHED = {
-    'ship_motion_node': {topics.CLOCK: 1, topics.SHIP_ODOM: 4, topics.SHIP_ACCEL: 2, topics.SHIP_FIX: 1},
-    'master_ins_node': {topics.MASTER_ODOM: 2, topics.MASTER_FIX: 1, topics.TRUTH_MASTER_ERROR: 1},
-    'slave_ins_node': {topics.AIRCRAFT_IMU: 2, topics.TRUTH_AIRCRAFT_ODOM: 3, topics.TRUTH_MISALIGNMENT: 1,
-                       topics.TRUTH_IMU_BIAS: 1},
-    'ldv_node': {topics.LDV_TWIST: 2, topics.DOPPLER_TWIST: 2},   # filter + recorder
-    'alignment_filter_node': {**{t: 1 for t in topics.FILTER_OUTPUT_TOPICS}, topics.ALIGN_MISALIGNMENT: 2},
+# the nodes (the recorder among them) whose subscriptions each node waits for before it sends on
+# a topic: by name, so that another subscriber (echo.sh, a second recorder) cannot stand in for
+# one still being discovered, which would miss the start
+REC, SHIP, MASTER, SLAVE, LDV, FILTER = ('recorder', 'ship_motion_node', 'master_ins_node', 'slave_ins_node',
+                                         'ldv_node', 'alignment_filter_node')
+AIR, AIR_FILTER = 'air_data_node', 'air_data_filter_node'
+MATCHED: dict[str, dict[str, tuple[str, ...]]] = {
+    SHIP: {topics.CLOCK: (REC,), topics.SHIP_ODOM: (REC, MASTER, SLAVE, LDV), topics.SHIP_ACCEL: (REC, SLAVE),
+           topics.SHIP_FIX: (REC,)},
+    MASTER: {topics.MASTER_ODOM: (REC, FILTER), topics.MASTER_FIX: (REC,), topics.TRUTH_MASTER_ERROR: (REC,)},
+    SLAVE: {topics.AIRCRAFT_IMU: (REC, FILTER), topics.TRUTH_AIRCRAFT_ODOM: (REC, LDV, SHIP),   # SHIP: its pacing
+            topics.TRUTH_MISALIGNMENT: (REC,), topics.TRUTH_IMU_BIAS: (REC,)},
+    LDV: {topics.LDV_TWIST: (REC, FILTER), topics.DOPPLER_TWIST: (REC, FILTER)},
+    FILTER: {**{t: (REC,) for t in topics.FILTER_OUTPUT_TOPICS}, topics.ALIGN_MISALIGNMENT: (REC, SHIP)},
 }
+
 # the ship runs at most its lead ahead of these (alignment_ros.pacing): of the slave's truth (the
 # LDV pairs it with the ship's odometry and would buffer the ship's for as long as the slave lags)
 # of the filter's output (the slowest consumer: every queue upstream of it holds at most the lead)
@@ -82,24 +89,25 @@ def nodes_of(sc: core_scenario.Scenario) -> tuple[str, ...]:
             'master_ins_node')
 
 
-def matched_of(sc: core_scenario.Scenario) -> dict[str, dict[str, int]]:
-    """MATCHED with the subscriptions the scenario's optional nodes add (each count: its
-    readers, the recorder included)."""
+def matched_of(sc: core_scenario.Scenario) -> dict[str, dict[str, tuple[str, ...]]]:
+    """MATCHED with the subscriptions the scenario's optional nodes add."""
     m = {k: dict(v) for k, v in MATCHED.items()}
     air, ref = sc.fads.enabled, sc.reference_ins.enabled
     paper, aligned = sc.air_data_filter.form == 'paper', sc.air_data_filter.ins_source == 'aligned'
     if air:
-        m['air_data_node'] = {**{t: 2 for t in topics.FADS_PORT_TOPICS}, topics.TRUTH_AIR_DATA_STATE: 1,
-                              topics.TRUTH_WIND: 1}
-        m['air_data_filter_node'] = {t: 1 for t in (topics.AIR_DATA_VELOCITY, topics.AIR_DATA_STATIC_PRESSURE,
-                                                    topics.AIR_DATA_TOTAL_PRESSURE, topics.AIR_DATA_WIND,
-                                                    topics.AIR_DATA_STATE, topics.DIAGNOSTICS)}
-        m['air_data_filter_node'][topics.AIR_DATA_VELOCITY] += 1     # the ship's pacing watcher
-        m['slave_ins_node'][topics.TRUTH_AIRCRAFT_ODOM] += 1
-        m['slave_ins_node'][topics.AIRCRAFT_IMU] += int(paper)
-        m['alignment_filter_node'][topics.ALIGN_ODOM] += int(aligned)
+        m[AIR] = {**{t: (REC, AIR_FILTER) for t in topics.FADS_PORT_TOPICS}, topics.TRUTH_AIR_DATA_STATE: (REC,),
+                  topics.TRUTH_WIND: (REC,)}
+        m[AIR_FILTER] = {t: (REC,) for t in (topics.AIR_DATA_VELOCITY, topics.AIR_DATA_STATIC_PRESSURE,
+                                             topics.AIR_DATA_TOTAL_PRESSURE, topics.AIR_DATA_WIND,
+                                             topics.AIR_DATA_STATE, topics.DIAGNOSTICS)}
+        m[AIR_FILTER][topics.AIR_DATA_VELOCITY] += (SHIP,)     # the ship's pacing watcher
+        m[SLAVE][topics.TRUTH_AIRCRAFT_ODOM] += (AIR,)
+        if paper:
+            m[SLAVE][topics.AIRCRAFT_IMU] += (AIR_FILTER,)
+        if aligned:
+            m[FILTER][topics.ALIGN_ODOM] += (AIR_FILTER,)
     if ref:
-        m['slave_ins_node'][topics.REFERENCE_INS_ODOM] = 1 + int(air and not aligned)
+        m[SLAVE][topics.REFERENCE_INS_ODOM] = (REC,) if aligned or not air else (REC, AIR_FILTER)
     return m
 
 
@@ -129,8 +137,8 @@ def end_topics_of(sc: core_scenario.Scenario) -> tuple[str, ...]:
     return END_TOPICS + ((topics.FADS_PORT_TOPICS[-1], topics.AIR_DATA_VELOCITY) if sc.fads.enabled else ())
 
 
-def _list_param(name: str, items: dict[str, int]) -> str:
-    return f'{name}:=[' + ','.join(f'"{t}:{n}"' for t, n in items.items()) + ']'
+def _list_param(name: str, items: dict[str, tuple[str, ...]]) -> str:
+    return f'{name}:=[' + ','.join(f'"{t}:{"+".join(nodes)}"' for t, nodes in items.items()) + ']'
 
 
 # the streams whose last stamp marks the end of the run (the filter's output last: it has
@@ -150,8 +158,8 @@ def write_params(given: dict, sc: core_scenario.Scenario, path: Path) -> None:
     path.write_text(params_yaml(given, sc))
 
 
-def start(run: Run, name: str, params: Path, *args: str, matched: dict[str, dict[str, int]] = MATCHED
-          ) -> subprocess.Popen:
+def start(run: Run, name: str, params: Path, *args: str,
+          matched: dict[str, dict[str, tuple[str, ...]]] = MATCHED) -> subprocess.Popen:
     """Start a node of the run through scripts/start_node.sh, its output to logs/NAME.log."""
     out = run.out
     log = open(out / 'logs' / f'{name}.log', 'w')

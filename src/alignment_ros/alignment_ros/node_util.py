@@ -59,19 +59,16 @@ class CountingNode(Node):
         self.declare_parameter('stats_path', '', ParameterDescriptor(
             description='write publish/receive counts here (JSON) at shutdown; empty: do not'))
         self.declare_parameter('hold_until_matched', [''], ParameterDescriptor(
-            description="'topic:count' pairs: hold this node's messages on topic until its "
-                        "publisher has matched count subscriptions (no message into the void)"))
+            description="'topic:count' or 'topic:node+node...' items: hold this node's messages on "
+                        "topic until its publisher has matched count subscriptions, or a "
+                        "subscription of each node named (no message into the void)"))
         self.declare_parameter('hold_for_node', '', ParameterDescriptor(
             description="with hold_until_matched: also wait until this node (the recorder) has a "
                         "matched subscription on the topic; the count alone can be met by an extra "
                         "subscriber such as echo.sh, and the recorder would miss the first messages"))
         self._hold_node: str = self.get_parameter('hold_for_node').value
         self._pubs: dict[str, object] = {}
-        self._need: dict[str, int] = {}
-        for item in self.get_parameter('hold_until_matched').value:
-            if item:
-                topic, _, n = item.rpartition(':')
-                self._need[topic] = int(n)
+        self._need: dict[str, Readers] = parse_readers(self.get_parameter('hold_until_matched').value)
         self._held: dict[str, list] = {}
         self._all_acked: bool | None = None   # set by wait_acked()
         self._next_trim = time.monotonic() + TRIM_INTERVAL_S
@@ -94,19 +91,15 @@ class CountingNode(Node):
         return pub
 
     def _matched(self, topic: str) -> bool:
-        """The topic's publisher has its count of subscriptions and, with hold_for_node, every
-        subscription discovered on the topic (that node's among them) is matched."""
+        """The topic's publisher has the subscriptions it waits for (see readers_matched), those
+        of hold_for_node included."""
         pub = self._pubs.get(topic)
         if pub is None:
             return False
-        n = pub.get_subscription_count()
-        if n < self._need[topic]:
-            return False
-        if self._hold_node:
-            infos = self.get_subscriptions_info_by_topic(topic)
-            if n < len(infos) or not any(i.node_name == self._hold_node for i in infos):
-                return False
-        return True
+        count, names = self._need[topic]
+        if self._hold_node and self._hold_node not in names:
+            names = (*names, self._hold_node)
+        return readers_matched(self, topic, pub.get_subscription_count(), count, names)
 
     def send(self, topic: str, msg) -> None:
         need = self._need.get(topic)
@@ -186,6 +179,42 @@ class CountingNode(Node):
         if path:
             Path(path).write_text(json.dumps(self.stats(), indent=1))
 
+
+
+Readers = tuple[int, tuple[str, ...]]
+"""What a topic waits for: a count of matched subscriptions, and nodes that must be among them."""
+
+
+def parse_readers(items) -> dict[str, Readers]:
+    """{topic: (count, node names)} of 'topic:count' and 'topic:node+node...' items (a list of
+    names counts as that many subscriptions); empty items are skipped."""
+    out: dict[str, Readers] = {}
+    for item in items:
+        if not item:
+            continue
+        topic, _, what = item.rpartition(':')
+        if not topic or not what:
+            raise ConfigError(f"'{item}': expected 'topic:count' or 'topic:node+node...'")
+        if what.isdigit():
+            out[topic] = (int(what), ())
+        else:
+            names = tuple(n for n in what.split('+') if n)
+            out[topic] = (len(names), names)
+    return out
+
+
+def readers_matched(node: Node, topic: str, matched: int, count: int, names: tuple[str, ...]) -> bool:
+    """`matched` subscriptions (a publisher's count) reach `count` and, when nodes are named,
+    each of them has a subscription on the topic and every subscription discovered on it is
+    matched. A count alone can be met by a subscriber nobody waits for (echo.sh, a second
+    recorder) while one that is waited for is still being discovered: it would miss the start."""
+    if matched < count:
+        return False
+    if not names:
+        return True
+    infos = node.get_subscriptions_info_by_topic(topic)
+    have = {i.node_name for i in infos}
+    return matched >= len(infos) and all(n in have for n in names)
 
 
 def _refuse(message: str) -> None:

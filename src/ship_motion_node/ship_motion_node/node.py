@@ -31,8 +31,9 @@ class ShipMotionNode(node_util.CountingNode):
         self.declare_parameter('real_time_factor', 5.0, ParameterDescriptor(
             description='simulation speed: 1 = real time, 0 = as fast as possible'))
         self.declare_parameter('wait_subscribers', [''], ParameterDescriptor(
-            description="'topic:count' pairs to wait for before starting: matched subscriptions "
-                        "for this node's own topics, discovered subscriptions for any other"))
+            description="'topic:count' or 'topic:node+node...' items to wait for before starting: "
+                        "matched subscriptions (or those of the nodes named) for this node's own "
+                        "topics, discovered subscriptions for any other"))
         self.declare_parameter('wait_timeout_s', 60.0, ParameterDescriptor(
             description='give up waiting for subscribers after this many wall seconds'))
         self.declare_parameter('fix_decimation', 10, ParameterDescriptor(
@@ -113,14 +114,11 @@ class ShipMotionNode(node_util.CountingNode):
         return SetParametersResult(successful=True)
 
     def _wait_for_subscribers(self, stop) -> bool:
-        wants = []
-        for item in self.get_parameter('wait_subscribers').value:
-            if item:
-                topic, _, n = item.rpartition(':')
-                wants.append((topic, int(n)))
+        wants = node_util.parse_readers(self.get_parameter('wait_subscribers').value)
         deadline = time.monotonic() + self.get_parameter('wait_timeout_s').value
         while not stop():
-            missing = [(t, n) for t, n in wants if self._subscribers(t) < n]
+            missing = [(t, names or n) for t, (n, names) in wants.items()
+                       if not node_util.readers_matched(self, t, self._subscribers(t), n, names)]
             # and every paced stream's publisher matched with its watcher: a publisher that holds
             # its messages until the watcher has matched (hold_until_matched) would otherwise wait
             # for a ship that has finished a short run and gone
