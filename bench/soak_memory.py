@@ -8,7 +8,10 @@ Simulated time is read from the run's /clock (a best-effort subscriber of depth 
 domain: it holds nothing back). The slopes are fitted over the second half of the simulated run
 (the first half holds the start-up: imports, DDS discovery, the first allocations, the bag's
 reorder buffer filling up to the streams' lag): through every sample, through 5-minute medians
-and through 5-minute minima (see `fits`)."""
+and through 5-minute minima (see `fits`). A second table splits the resident set: its private
+anonymous part (RssAnon, what a leak raises) fitted the same way, and its shared-memory part
+(RssShmem: the Fast DDS segments' pages the process has touched) against the segments' mapped
+size, which bounds it."""
 from __future__ import annotations
 
 import argparse
@@ -42,23 +45,47 @@ def descendants(root: int) -> set[int]:
     return out
 
 
+# /proc/PID/status fields sampled beside VmRSS (the key NAME is VmRSS; NAME + suffix the others)
+PARTS = {'RssAnon:': ' anon', 'RssShmem:': ' shmem'}
+SHM_MAPPED = ' shm mapped'
+
+
+def shm_mapped_mib(pid: int) -> float:
+    """MiB of Fast DDS shared-memory segments and ports the process maps: the bound of its
+    RssShmem (a segment's pages count once touched, and its allocator touches more of them as
+    buffers land at new offsets, up to the whole segment)."""
+    total = 0
+    for line in (Path('/proc') / str(pid) / 'maps').read_text().splitlines():
+        if '/dev/shm/fastrtps' in line:
+            lo, hi = line.split(None, 1)[0].split('-')
+            total += int(hi, 16) - int(lo, 16)
+    return total / 2**20
+
+
 def rss_by_node(root: int) -> dict[str, float]:
     """MiB resident per node process of the run below `root` (by its command line; not the
-    processes of other runs on the machine)."""
+    processes of other runs on the machine): NAME is VmRSS; NAME + ' anon' its private
+    anonymous part (RssAnon: what a leak raises), NAME + ' shmem' its shared-memory part and
+    NAME + ' shm mapped' that part's bound (see shm_mapped_mib)."""
     out: dict[str, float] = {}
     for pid in descendants(root):
         proc = Path('/proc') / str(pid)
         try:
             cmd = (proc / 'cmdline').read_bytes().replace(b'\0', b' ').decode(errors='replace')
             status = (proc / 'status').read_text()
+            shm = shm_mapped_mib(pid)
         except OSError:
             continue
         name = next((n for n in NODES if n in cmd and 'start_node.sh' not in cmd), None)
         if name is None or 'python' not in cmd and name != 'recorder':
             continue
-        for line in status.splitlines():
-            if line.startswith('VmRSS:'):
-                out[name] = max(out.get(name, 0.0), int(line.split()[1]) / 1024.0)
+        fields = {f: int(line.split()[1]) / 1024.0 for line in status.splitlines()
+                  for f in ('VmRSS:', *PARTS) if line.startswith(f)}
+        if 'VmRSS:' not in fields or fields['VmRSS:'] < out.get(name, 0.0):
+            continue                     # the larger of a node's processes (the interpreter, not its shell)
+        out[name] = fields['VmRSS:']
+        out.update({name + suffix: fields[f] for f, suffix in PARTS.items() if f in fields})
+        out[name + SHM_MAPPED] = shm
     return out
 
 
@@ -115,6 +142,26 @@ def report(samples: list) -> dict[str, dict[str, float]]:
         out['slopes_mib_per_h'][n], out['median_slopes_mib_per_h'][n], out['floor_slopes_mib_per_h'][n] = \
             every, med, low
         print(f'{n:<24}{r[0]:>14.1f}{r[-1]:>12.1f}{every:>19.2f}{med:>15.2f}{low:>14.2f}')
+    parts = [n for n in NODES if any(n + PARTS['RssAnon:'] in s for _, _, s in samples)]
+    if not parts:
+        return out          # samples saved before the parts were sampled
+    print(f"\n{'node':<24}{'anon start':>11}{'anon end':>9}{'anon MiB/h':>11}{'medians':>8}{'floors':>8}"
+          f"{'shmem start':>12}{'shmem end':>10}{'shm mapped':>11}")
+    for k in ('anon_slopes_mib_per_h', 'anon_median_slopes_mib_per_h', 'anon_floor_slopes_mib_per_h'):
+        out[k] = {}
+    out['shmem_end_mib'], out['shm_mapped_mib'] = {}, {}
+    for n in parts:
+        pts = [(sim, s[n + ' anon'], s.get(n + ' shmem', 0.0), s.get(n + SHM_MAPPED, 0.0))
+               for _, sim, s in samples if n + ' anon' in s and sim < end]
+        if len(pts) < 4:
+            continue
+        t, anon, shmem, mapped = np.array(pts).T
+        every, med, low = fits(t, anon)
+        out['anon_slopes_mib_per_h'][n], out['anon_median_slopes_mib_per_h'][n] = every, med
+        out['anon_floor_slopes_mib_per_h'][n] = low
+        out['shmem_end_mib'][n], out['shm_mapped_mib'][n] = float(shmem[-1]), float(mapped.max())
+        print(f'{n:<24}{anon[0]:>11.1f}{anon[-1]:>9.1f}{every:>11.2f}{med:>8.2f}{low:>8.2f}'
+              f'{shmem[0]:>12.2f}{shmem[-1]:>10.2f}{mapped.max():>11.2f}')
     return out
 
 
