@@ -2,6 +2,7 @@
 results files, reports that render, and numbers that make physical sense."""
 import dataclasses
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -89,12 +90,15 @@ def test_dask_local_cluster_gives_the_process_pool_results(tmp_path, monkeypatch
         return ex
     monkeypatch.setattr(monte_carlo, 'make_executor', spy)
     args = ['consistency_catapult', '--quick', '--seeds', '3', '--workers', '2']
+    environ = dict(os.environ)
     assert main(args + ['--out', str(tmp_path / 'pool')]) == 0
     try:
         assert main(args + ['--scheduler', 'local', '--out', str(tmp_path / 'dask')]) == 0
     finally:
         left = _dask_clients_left()
     assert left == 0, 'run_many left its Dask client open'
+    assert 'MALLOC_TRIM_THRESHOLD_' not in os.environ or 'MALLOC_TRIM_THRESHOLD_' in environ, \
+        "Dask's nanny variables leaked into this process's environment"
     assert made == ['concurrent', 'distributed']
     for f in ('runs.csv', 'summary.csv', 'meta.json'):
         assert (tmp_path / 'pool' / f).read_bytes() == (tmp_path / 'dask' / f).read_bytes(), f

@@ -1,6 +1,7 @@
 """alignment_ros.heap: a large array freed below a small live allocation goes back to the OS."""
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -34,7 +35,9 @@ print(rss_mib() - base)
 
 
 def _growth_mib(mode: str) -> float:
-    res = subprocess.run([sys.executable, '-c', PROBE, mode], capture_output=True, text=True, timeout=60)
+    # glibc's defaults: a MALLOC_TRIM_THRESHOLD_ (Dask's nanny exports one) or a tunable also fixes the threshold
+    env = {k: v for k, v in os.environ.items() if not k.startswith('MALLOC_') and k != 'GLIBC_TUNABLES'}
+    res = subprocess.run([sys.executable, '-c', PROBE, mode], capture_output=True, text=True, timeout=60, env=env)
     assert res.returncode == 0, res.stderr
     return float(res.stdout)
 

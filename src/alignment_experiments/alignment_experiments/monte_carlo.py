@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import multiprocessing
+import os
 import sys
 import time
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
@@ -139,6 +140,15 @@ def run_one(spec: RunSpec) -> RunOutcome:
                       sigma_t=sig_a.astype(np.float32), wall_s=time.perf_counter() - wall)
 
 
+def _restore_environ(saved: dict[str, str]) -> None:
+    """Put back this process's environment: Dask's nanny writes its workers' variables into it
+    (MALLOC_TRIM_THRESHOLD_, which also fixes glibc's mmap threshold in every process started
+    from here afterwards: graph nodes, a test's probes)."""
+    for k in set(os.environ) - set(saved):
+        del os.environ[k]
+    os.environ.update(saved)
+
+
 def make_executor(workers: int, scheduler: str | None = None) -> Executor | None:
     """A process pool of `workers` (None: run inline when workers <= 1), or a Dask cluster's
     executor when `scheduler` is an address or 'local'."""
@@ -147,8 +157,10 @@ def make_executor(workers: int, scheduler: str | None = None) -> Executor | None
             from dask.distributed import Client, LocalCluster
         except ImportError:
             raise SystemExit('--scheduler needs Dask (requirements.txt): run scripts/setup.sh') from None
+        environ = dict(os.environ)
         cluster = LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True) \
             if scheduler == 'local' else None
+        _restore_environ(environ)
         client = Client(cluster if cluster is not None else scheduler)
         ex = client.get_executor()
         shutdown = ex.shutdown
@@ -159,6 +171,7 @@ def make_executor(workers: int, scheduler: str | None = None) -> Executor | None
             client.close()
             if cluster is not None:
                 cluster.close()
+            _restore_environ(environ)
         ex.shutdown = close
         return ex
     if workers <= 1:
