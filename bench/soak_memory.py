@@ -71,13 +71,16 @@ def rss_by_node(root: int) -> dict[str, float]:
     for pid in descendants(root):
         proc = Path('/proc') / str(pid)
         try:
-            cmd = (proc / 'cmdline').read_bytes().replace(b'\0', b' ').decode(errors='replace')
+            argv = (proc / 'cmdline').read_bytes().decode(errors='replace').split('\0')
             status = (proc / 'status').read_text()
             shm = shm_mapped_mib(pid)
         except OSError:
             continue
-        name = next((n for n in NODES if n in cmd and 'start_node.sh' not in cmd), None)
-        if name is None or 'python' not in cmd and name != 'recorder':
+        # the interpreter running a node's entry point (.../lib/NAME/NAME): not its start_node.sh,
+        # nor another node whose arguments name it (hold_until_matched lists its readers)
+        exe = Path(argv[1]).name if len(argv) > 1 and 'python' in Path(argv[0]).name else ''
+        name = exe if exe in NODES else None
+        if name is None:
             continue
         fields = {f: int(line.split()[1]) / 1024.0 for line in status.splitlines()
                   for f in ('VmRSS:', *PARTS) if line.startswith(f)}
