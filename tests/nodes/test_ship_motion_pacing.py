@@ -80,17 +80,7 @@ def test_the_ship_runs_no_further_than_its_lead_ahead_of_a_paced_stream(ros):
     stream at t0 + 1 s lets it on to t0 + 1 s + lead, and no further; the stream then silent for
     pace_release_s of wall time, the ship goes on without it to the end."""
     node, start = ros
-    sc = scenario.load('catapult_paper', {'duration_s': 20.0})
-    got: list[float] = []
-    sub = node.create_subscription(Clock, topics.CLOCK, lambda m: got.append(convert.to_ns(m.clock) * 1e-9),
-                                   qos.STREAM)
-    paced = node.create_publisher(Odometry, topics.TRUTH_AIRCRAFT_ODOM, qos.STREAM)
-    start('ship_motion_node', '-p', f'wait_subscribers:=["{topics.CLOCK}:1","{GO}:1"]',
-          '-p', f'pace_topics:=["{topics.TRUTH_AIRCRAFT_ODOM}"]', '-p', 'max_lead_s:=0.5',
-          '-p', 'pace_release_s:=4.0',
-          sets={'real_time_factor': 0.0, 'duration_s': 20.0})
-    spin_until(node, lambda: sub.get_publisher_count() >= 1 and paced.get_subscription_count() >= 1)
-    node.create_subscription(Empty, GO, lambda m: None, qos.STREAM)
+    sc, got, paced, _ = _start_paced_ship(node, start, 20.0, max_lead_s=0.5, release_s=4.0)
     t0 = sc.t0_ns * 1e-9
     spin_until(node, lambda: got and got[-1] >= t0 + 0.5 - 1e-9)
     spin_for(node, 1.5)
@@ -118,16 +108,7 @@ def test_the_ship_stays_until_a_paced_stream_is_heard(ros):
     first messages until the ship's watcher has matched it would hold them for ever if the ship
     left at its last sample. The ship stays until each paced stream has sent something."""
     node, start = ros
-    sc = scenario.load('catapult_paper', {'duration_s': 1.0})
-    got: list[float] = []
-    sub = node.create_subscription(Clock, topics.CLOCK, lambda m: got.append(convert.to_ns(m.clock) * 1e-9),
-                                   qos.STREAM)
-    paced = node.create_publisher(Odometry, topics.TRUTH_AIRCRAFT_ODOM, qos.STREAM)
-    proc = start('ship_motion_node', '-p', f'wait_subscribers:=["{topics.CLOCK}:1","{GO}:1"]',
-                 '-p', f'pace_topics:=["{topics.TRUTH_AIRCRAFT_ODOM}"]', '-p', 'max_lead_s:=5.0',
-                 '-p', 'pace_release_s:=60.0', sets={'real_time_factor': 0.0, 'duration_s': 1.0})
-    spin_until(node, lambda: sub.get_publisher_count() >= 1 and paced.get_subscription_count() >= 1)
-    node.create_subscription(Empty, GO, lambda m: None, qos.STREAM)
+    sc, got, paced, proc = _start_paced_ship(node, start, 1.0, max_lead_s=5.0, release_s=60.0)
     spin_until(node, lambda: got and got[-1] >= (sc.t0_ns + sc.n_samples * sc.dt_ns) * 1e-9 - 0.011)
     spin_for(node, 2.0)
     assert proc.poll() is None                  # every sample sent, the stream silent: still there
@@ -138,3 +119,19 @@ def test_the_ship_stays_until_a_paced_stream_is_heard(ros):
     while proc.poll() is None and time.monotonic() < end:
         spin_for(node, 0.1)
     assert proc.poll() == 0                     # heard: the ship finishes
+
+
+def _start_paced_ship(node, start, duration_s: float, max_lead_s: float, release_s: float):
+    """The ship at real_time_factor 0 paced on /truth/aircraft/odom, which this test publishes:
+    (scenario, /clock seconds received, the paced publisher, the ship's process), once started."""
+    sc = scenario.load('catapult_paper', {'duration_s': duration_s})
+    got: list[float] = []
+    sub = node.create_subscription(Clock, topics.CLOCK, lambda m: got.append(convert.to_ns(m.clock) * 1e-9),
+                                   qos.STREAM)
+    paced = node.create_publisher(Odometry, topics.TRUTH_AIRCRAFT_ODOM, qos.STREAM)
+    proc = start('ship_motion_node', '-p', f'wait_subscribers:=["{topics.CLOCK}:1","{GO}:1"]',
+                 '-p', f'pace_topics:=["{topics.TRUTH_AIRCRAFT_ODOM}"]', '-p', f'max_lead_s:={max_lead_s}',
+                 '-p', f'pace_release_s:={release_s}', sets={'real_time_factor': 0.0, 'duration_s': duration_s})
+    spin_until(node, lambda: sub.get_publisher_count() >= 1 and paced.get_subscription_count() >= 1)
+    node.create_subscription(Empty, GO, lambda m: None, qos.STREAM)
+    return sc, got, paced, proc

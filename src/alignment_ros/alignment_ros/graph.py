@@ -166,7 +166,7 @@ def start(run: Run, name: str, params: Path, *args: str,
     cmd = [str(root() / 'scripts' / 'start_node.sh'), name, '--params-file', str(params),
            '--ros-args', '-p', f'stats_path:={out / "stats" / (name + ".json")}', *args]
     if name in matched and not any('hold_until_matched' in x for x in args):
-        cmd += ['-p', _list_param('hold_until_matched', matched[name]), '-p', 'hold_for_node:=recorder']
+        cmd += ['-p', _list_param('hold_until_matched', matched[name])]
     return run.spawn(name, cmd, stdout=log, stderr=subprocess.STDOUT)
 
 

@@ -62,11 +62,6 @@ class CountingNode(Node):
             description="'topic:count' or 'topic:node+node...' items: hold this node's messages on "
                         "topic until its publisher has matched count subscriptions, or a "
                         "subscription of each node named (no message into the void)"))
-        self.declare_parameter('hold_for_node', '', ParameterDescriptor(
-            description="with hold_until_matched: also wait until this node (the recorder) has a "
-                        "matched subscription on the topic; the count alone can be met by an extra "
-                        "subscriber such as echo.sh, and the recorder would miss the first messages"))
-        self._hold_node: str = self.get_parameter('hold_for_node').value
         self._pubs: dict[str, object] = {}
         self._need: dict[str, Readers] = parse_readers(self.get_parameter('hold_until_matched').value)
         self._held: dict[str, list] = {}
@@ -91,14 +86,11 @@ class CountingNode(Node):
         return pub
 
     def _matched(self, topic: str) -> bool:
-        """The topic's publisher has the subscriptions it waits for (see readers_matched), those
-        of hold_for_node included."""
+        """The topic's publisher has the subscriptions it waits for (see readers_matched)."""
         pub = self._pubs.get(topic)
         if pub is None:
             return False
         count, names = self._need[topic]
-        if self._hold_node and self._hold_node not in names:
-            names = (*names, self._hold_node)
         return readers_matched(self, topic, pub.get_subscription_count(), count, names)
 
     def send(self, topic: str, msg) -> None:

@@ -7,7 +7,7 @@ as DDS takes it): there (clock=False) the filter's output stamps are the simulat
 reached. Out of the data path: BEST_EFFORT subscriptions with a short history, so no publisher
 ever waits for them (a reliable writer neither blocks on nor resends to a best-effort reader; a
 node's end-of-run acknowledgements count reliable readers only), and it publishes nothing. The
-nodes hold their messages until the recorder itself has matched (``hold_for_node``), so this
+nodes hold their messages until the recorder itself has matched (named in ``hold_until_matched``), so this
 extra subscriber cannot make the recorder miss any. Messages so far: the caller's count (the
 recorder's progress lines)."""
 from __future__ import annotations

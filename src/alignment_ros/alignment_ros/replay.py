@@ -60,7 +60,7 @@ from .shm_cleanup import clean_stale
 from .signals import Interrupted, SignalGuard
 from .topics import FILTER_OUTPUT_TOPICS, SENSOR_TOPICS
 
-HOLD = 'hold_until_matched:=[' + ','.join(f'"{t}:1"' for t in FILTER_OUTPUT_TOPICS) + ']'
+HOLD = 'hold_until_matched:=[' + ','.join(f'"{t}:recorder"' for t in FILTER_OUTPUT_TOPICS) + ']'
 FILTER = 'alignment_filter_node'
 END_TIMEOUT_S = 120.0       # after the player: the filter's outputs reach the input's end
 DAMAGED_GRACE_S = 10.0      # a repaired input: its cut streams need not bring the outputs there
@@ -226,7 +226,7 @@ def _run(run: Run, bag: Path, params: Path, play: list[str], wait: list[str], en
                              [topics.ALIGN_MISALIGNMENT], expect_counts=expect)
         end_reached = watch_end_time(rec, live.recorded)
         live.start()
-        start(run, FILTER, params, '-p', HOLD, '-p', 'hold_for_node:=recorder')
+        start(run, FILTER, params, '-p', HOLD)
         _wait_graph()
         player = run.spawn('player', [
             str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/player'), str(bag),

@@ -181,7 +181,7 @@ class ShipMotionNode(node_util.CountingNode):
     def _hear_paced_streams(self, stop) -> None:
         """Stay until every paced stream has been heard (or was silent for pace_release_s). Its
         publisher may hold its first messages until this node's watcher has matched it (the
-        graph counts the watcher in hold_until_matched); on a run shorter than the lead the ship
+        graph names the ship in hold_until_matched); on a run shorter than the lead the ship
         never waited on them, and leaving at once could leave them held for ever."""
         if self.lead is None:
             return
