@@ -3,6 +3,11 @@ reader let go are forgotten and their memory reused, so a stream of any length h
 buffer, while a batch that reads everything keeps everything."""
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -63,3 +68,31 @@ def test_the_carriers_gear_flexure_and_track_hold_bounded_histories_in_a_long_st
     assert gear.n == n and gear._q.capacity <= 1024
     assert stage.kin.flex._th.capacity <= 1024
     assert src.track._steps * src.track.h >= 600.0 and src.track._coef.capacity <= 8192
+
+
+_FILL_PROBE = """
+import numpy as np
+from alignment_core.recent_rows import RecentRows
+
+def anon_kib():
+    for line in open('/proc/self/status'):
+        if line.startswith('RssAnon:'):
+            return int(line.split()[1])
+
+rows = RecentRows(24, capacity=8192)
+row = np.ones(24)
+before = anon_kib()
+for k in range(4000):           # half the buffer: rows land on pages not written before
+    rows.append(row)
+    rows.forget_before(k - 100)
+print(anon_kib() - before)
+"""
+
+
+@pytest.mark.skipif(not Path('/proc/self/status').exists(), reason='needs /proc')
+def test_a_buffer_is_resident_when_made_not_page_by_page_as_it_first_fills():
+    # 8192 rows of 24 floats are 1.5 MiB: left unwritten until rows reach them, half of it
+    # (768 KiB) would become resident while the rows below fill it; written when made, none
+    env = {k: v for k, v in os.environ.items() if not k.startswith(('MALLOC_', 'GLIBC_TUNABLES'))}
+    out = subprocess.run([sys.executable, '-c', _FILL_PROBE], capture_output=True, text=True, env=env, check=True)
+    assert int(out.stdout) < 8192 * 24 * 8 / 1024 / 2 / 4

@@ -6,7 +6,12 @@ increments between the previous sample and this one). Keeping every row would gr
 run; `RecentRows` keeps the rows from the oldest a reader may still ask for: `forget_before(k)`
 lets the rows below k go, and their memory is reused (the live rows are moved down once the
 dead ones fill half the buffer, so a stream of any length holds about twice what is live). A
-batch run that appends everything before reading forgets nothing and reads any row."""
+batch run that appends everything before reading forgets nothing and reads any row.
+
+The buffer is written through (NaN) when it is made or grown: its pages are resident from the
+start. Left unwritten, they would become resident one by one as rows first land on them, and a
+large buffer's resident set would rise for as long as its first fill takes (the ship's track:
+1.5 MiB over its first 68 simulated minutes), a growth a memory soak cannot tell from a leak."""
 from __future__ import annotations
 
 import numpy as np
@@ -16,7 +21,7 @@ class RecentRows:
     """Rows (width,) at sample indices 0, 1, ...: appended in order, read back by index."""
 
     def __init__(self, width: int, capacity: int = 1024) -> None:
-        self._a = np.empty((capacity, width))
+        self._a = np.full((capacity, width), np.nan)
         self._base = 0          # the sample index of self._a[0]
         self._keep = 0          # rows below this index are forgotten
         self.n = 0              # rows appended (indices 0 .. n - 1)
@@ -49,7 +54,7 @@ class RecentRows:
             self._a[:len(live)] = live
             self._base = self._keep
         while self.n - self._base + m > len(self._a):
-            self._a = np.concatenate([self._a, np.empty_like(self._a)])
+            self._a = np.concatenate([self._a, np.full_like(self._a, np.nan)])
 
     def forget_before(self, k: int) -> None:
         """Rows below index k are no longer read (a later read of one raises)."""
