@@ -169,12 +169,13 @@ def align(sc: Scenario, inp: Inputs, final: bool = True) -> TransferAlignment:
     filt = TransferAlignment(sc.filter, plane_of(sc), sc.rate_hz)
     j_ldv = j_master = j_dop = 0        # sensor streams with their own rate / latency: pushed by stamp
     doppler = inp.doppler or []
+    ldv = ldv_wire.transmitted_all(inp.ldv)       # as the filter node decodes it from the messages
     for k in range(len(inp.ships)):
         t = int(inp.ships.t_ns[k])
         if k > 0:
             filt.push_imu(inp.imu[k - 1])
-        while j_ldv < len(inp.ldv) and inp.ldv[j_ldv].t_ns <= t:
-            filt.push_ldv(ldv_wire.transmitted(inp.ldv[j_ldv]))     # as the filter node decodes it
+        while j_ldv < len(ldv) and ldv[j_ldv].t_ns <= t:
+            filt.push_ldv(ldv[j_ldv])
             j_ldv += 1
         while j_dop < len(doppler) and doppler[j_dop].t_ns <= t:
             filt.push_doppler(doppler[j_dop])

@@ -51,3 +51,37 @@ def decode(t_ns: int, linear: np.ndarray, cov: np.ndarray) -> LdvSample:
 def transmitted(s: LdvSample) -> LdvSample:
     """The sample the filter decodes from the message of `s`."""
     return decode(s.t_ns, *encode(s))
+
+
+def transmitted_all(samples: list[LdvSample]) -> list[LdvSample]:
+    """`transmitted` of every sample, the covariances decomposed as one stack (a batch run's
+    whole LDV stream; the same bits as sample by sample: eigh solves each matrix on its own)."""
+    n = len(samples)
+    if n == 0:
+        return []
+    var = np.array([s.sigma**2 for s in samples], dtype=float)     # as encode squares it
+    valid = np.array([s.valid for s in samples], dtype=bool)
+    has_beam = np.array([s.beam is not None for s in samples], dtype=bool) & valid
+    beams = np.array([s.beam if b else (0.0, 0.0, 0.0) for s, b in zip(samples, has_beam)], dtype=float)
+    cov = np.zeros((n, 3, 3))
+    vector = valid & ~has_beam
+    for i in range(3):
+        cov[vector, i, i] = var[vector]
+    cov[has_beam] = var[has_beam, None, None] * (beams[has_beam, :, None] * beams[has_beam, None, :])
+    cov[~valid, 0, 0] = -1.0
+    trace = cov[:, 0, 0] + cov[:, 1, 1] + cov[:, 2, 2]
+    finite = np.isfinite(cov).all(axis=(1, 2)) & valid
+    w = np.zeros((n, 3))
+    vec = np.zeros((n, 3, 3))
+    if finite.any():
+        w[finite], vec[finite] = np.linalg.eigh(0.5 * (cov[finite] + cov[finite].transpose(0, 2, 1)))
+    out = []
+    for i, s in enumerate(samples):
+        v = np.array(s.v_s, dtype=float)
+        if not valid[i]:
+            out.append(LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.nan, valid=False))
+        elif finite[i] and trace[i] > 0.0 and w[i, 1] <= BEAM_RANK_TOLERANCE * trace[i]:
+            out.append(LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.sqrt(trace[i]), valid=True, beam=vec[i, :, 2]))
+        else:
+            out.append(LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.sqrt(cov[i, 0, 0]), valid=True))
+    return out

@@ -1,0 +1,60 @@
+"""The LDV sample through its message's encoding (sensors/ldv_wire.py): a beam's line of sight
+and sigma come back from its rank-1 covariance, a vector LDV's sigma from its diagonal, an
+invalid sample stays invalid; the whole-stream form gives the bits the per-sample one does."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from alignment_core.samples import LdvSample
+from alignment_core.sensors import ldv_wire
+
+
+def _samples(n: int = 400) -> list[LdvSample]:
+    rng = np.random.default_rng(7)
+    out = []
+    for k in range(n):
+        kind = k % 5
+        v = rng.normal(size=3)
+        sigma = float(rng.uniform(1e-4, 0.05))
+        if kind == 0:
+            out.append(LdvSample(t_ns=k, v_s=v, sigma=math.nan, valid=False))
+        elif kind == 1:
+            out.append(LdvSample(t_ns=k, v_s=v, sigma=sigma, valid=True))
+        else:
+            u = rng.normal(size=3)
+            u /= np.linalg.norm(u)
+            out.append(LdvSample(t_ns=k, v_s=float(u @ v) * u, sigma=sigma, valid=True, beam=u))
+    return out
+
+
+def test_a_beam_comes_back_as_its_line_of_sight_and_sigma():
+    u = np.array([0.6, -0.48, 0.64])
+    s = LdvSample(t_ns=5, v_s=1.5 * u, sigma=0.02, valid=True, beam=u)
+    back = ldv_wire.transmitted(s)
+    assert back.valid and back.t_ns == 5
+    assert math.isclose(back.sigma, 0.02, rel_tol=1e-12)
+    # the same line up to its sign (immaterial: the measurement is a projection)
+    assert abs(abs(float(back.beam @ u)) - 1.0) < 1e-12
+    np.testing.assert_array_equal(back.v_s, s.v_s)
+    vector = ldv_wire.transmitted(LdvSample(t_ns=6, v_s=u, sigma=0.03, valid=True))
+    assert vector.beam is None and math.isclose(vector.sigma, 0.03, rel_tol=1e-15)
+    assert not ldv_wire.transmitted(LdvSample(t_ns=7, v_s=u, sigma=math.nan, valid=False)).valid
+
+
+def test_the_whole_stream_decodes_to_the_bits_of_each_sample():
+    samples = _samples()
+    one_by_one = [ldv_wire.transmitted(s) for s in samples]
+    stream = ldv_wire.transmitted_all(samples)
+    assert len(stream) == len(one_by_one)
+    for a, b in zip(stream, one_by_one):
+        assert (a.t_ns, a.valid) == (b.t_ns, b.valid)
+        assert a.v_s.tobytes() == b.v_s.tobytes()
+        assert np.float64(a.sigma).tobytes() == np.float64(b.sigma).tobytes()
+        assert (a.beam is None) == (b.beam is None)
+        if a.beam is not None:
+            assert a.beam.tobytes() == b.beam.tobytes()
+    assert sum(s.beam is not None for s in stream) == 240
+    assert sum(not s.valid for s in stream) == 80
+    assert ldv_wire.transmitted_all([]) == []
