@@ -21,7 +21,8 @@ import pytest
 
 from alignment_core.air_data.atmosphere import Atmosphere
 from alignment_core.air_data.fads_solver import FadsSolver, cramer_rao_bound, epsilon_loop_gain
-from alignment_core.air_data.ports import EpsilonCalibration, PortModel
+from alignment_core.air_data.port_layout import EpsilonCalibration
+from alignment_core.air_data.ports import PortModel
 
 DEG = np.pi / 180.0
 SIGMA = 20.0

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from alignment_core.air_data.flow_angles import air_angles, air_direction, air_velocity
-from alignment_core.air_data.ports import EpsilonCalibration, PortGeometry, PortModel, port_pressures
+from alignment_core.air_data.port_layout import EpsilonCalibration, PortGeometry
+from alignment_core.air_data.ports import PortModel, port_pressures
 from alignment_core.validation import ConfigError, build
 
 DEG = np.pi / 180.0

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core.air_data.atmosphere import DayOffsets
+from alignment_core.air_data.day_offsets import DayOffsets
 from alignment_core.air_data.ports import PortModel
 from alignment_core.aircraft.wind import WindConfig
 from alignment_core.sensors.fads import AirDataTruth, FadsStage, simulate_fads

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from alignment_core.air_data.atmosphere import DayOffsets
-from alignment_core.air_data.ports import EpsilonCalibration, PortGeometry
+from alignment_core.air_data.day_offsets import DayOffsets
+from alignment_core.air_data.port_layout import EpsilonCalibration, PortGeometry
 from alignment_core.sensors.fads_config import FadsConfig, FadsFault, parse_faults
 from alignment_core.validation import ConfigError, build
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from alignment_core import pipeline
+from alignment_core.air_data.ports import PortModel
 from alignment_core.config.scenario import Scenario
 from alignment_core.estimation.air_data.config import AirDataFilterConfig
 from alignment_core.estimation.air_data.inputs import InsSample
@@ -100,7 +101,7 @@ def simulate(sc: Scenario) -> AirDataInputs:
 
 
 def make_estimator(cfg: AirDataFilterConfig, sc: Scenario) -> PaperAirDataFilter | TightAirDataFilter:
-    model = sc.fads.port_model
+    model = PortModel(sc.fads.geometry, sc.fads.epsilon)
     if cfg.form == 'paper':
         return PaperAirDataFilter(cfg, model, 1.0 / sc.rate_hz)
     return TightAirDataFilter(cfg, model, sc.fads.period_ns * 1e-9)

@@ -16,6 +16,7 @@ import numpy as np
 
 from alignment_core import air_data_run
 from alignment_core.air_data.fads_solver import cramer_rao_bound
+from alignment_core.air_data.ports import PortModel
 from alignment_core.config import scenario
 
 from .air_data_catalogue import QUANTITIES, SHOWN, AirDataExperiment
@@ -94,8 +95,9 @@ def run_seed(exp: AirDataExperiment, seed: int) -> list[dict]:
         run = air_data_run.estimate(csc, inp, form=cell.form, algorithm=cell.algorithm)
         labels = list(run.labels)
         a, b, m, p = (run.truth[:, labels.index(n)] for n in ('alpha_rad', 'beta_rad', 'mach', 'static_pressure_pa'))
-        cov = np.eye(sc.fads.port_model.geometry.count) * sc.fads.sigma_pa**2
-        cr = np.sqrt(np.diagonal(cramer_rao_bound(sc.fads.port_model, a, b, m, p, cov), axis1=-2, axis2=-1))
+        model = PortModel(sc.fads.geometry, sc.fads.epsilon)
+        cov = np.eye(model.geometry.count) * sc.fads.sigma_pa**2
+        cr = np.sqrt(np.diagonal(cramer_rao_bound(model, a, b, m, p, cov), axis1=-2, axis2=-1))
         row = {'cell': cell.label, 'form': cell.form, 'algorithm': cell.algorithm, 'seed': seed}
         row.update(score(exp, run, cr[:, :3], sc.duration_s))
         row['wall_s'] = time.perf_counter() - wall

@@ -10,7 +10,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 from support.air_data_flight import air_angles_frd, flight
 
-from alignment_core.air_data.atmosphere import Atmosphere, DayOffsets
+from alignment_core.air_data.atmosphere import Atmosphere
+from alignment_core.air_data.day_offsets import DayOffsets
 from alignment_core.air_data.ports import PortModel
 from alignment_core.estimation.air_data.config import AirDataFilterConfig
 from alignment_core.estimation.air_data.inputs import InsAt

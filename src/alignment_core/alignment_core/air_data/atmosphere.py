@@ -24,12 +24,10 @@ refines it by Newton steps on ln p(H), whose slope is -g0 / (R T(H)).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import ambiance
 import numpy as np
 
-from alignment_core.validation import require
+from alignment_core.air_data.day_offsets import STANDARD_DAY, DayOffsets
 
 R_AIR = float(ambiance.CONST.R)          # specific gas constant of dry air, J/(kg K)
 GAMMA = float(ambiance.CONST.kappa)      # ratio of specific heats, 1.4
@@ -45,20 +43,6 @@ _LAYERS = tuple((float(d['H_base']), float(d['T']), float(d['beta']))
 _H_MIN, _H_MAX = _LAYERS[0][0], float(ambiance.CONST.LAYER_DICTS[len(_LAYERS)]['H_top'])
 
 
-@dataclass(frozen=True)
-class DayOffsets:
-    """The day's departure from the standard atmosphere: dT added to the temperature at every
-    geopotential height (K), dp0 added to the sea-level pressure (Pa)."""
-    delta_t_k: float = 0.0
-    delta_p0_pa: float = 0.0
-
-    def validate(self) -> None:
-        require(-80.0 <= self.delta_t_k <= 80.0, f"delta_t_k must be in [-80, 80] K, got {self.delta_t_k}")
-        require(-20000.0 <= self.delta_p0_pa <= 20000.0,
-                f"delta_p0_pa must be in [-20000, 20000] Pa, got {self.delta_p0_pa}")
-
-
-STANDARD_DAY = DayOffsets()
 
 
 def geopotential_height(h: np.ndarray | float) -> np.ndarray:

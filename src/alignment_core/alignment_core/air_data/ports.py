@@ -7,14 +7,14 @@ sigma_i is the incidence of the flow on port i: the angle between the port's out
 normal n_i and the air-relative velocity (the stagnation point is where n = v_a / |v_a|).
 - eps = 0 is modified Newtonian flow: (p - p_inf) / q = Cp_max cos^2 sigma, Cp_max = qc / q.
 - eps = -1.25 is incompressible potential flow over a sphere: (p - p_inf) / qc = 1 - 9/4 sin^2 sigma.
-- eps is a calibration function of Mach (`EpsilonCalibration`), the same table for the truth
+- eps is a calibration function of Mach (`EpsilonCalibration`, air_data/port_layout.py), the same table for the truth
   and the filter (the filter may add an error state on top of it). The default table is
   illustrative, not a wind-tunnel calibration of a real nose: -0.1 subsonic, a rise through
   the transonic range, the Newtonian 0 from Mach 4 on, and flat there, because at hypersonic
   speed a slope of eps(M) would leave M undetermined (fads_solver.epsilon_loop_gain).
 - The model holds for sigma_i < 90 deg only: a port on the lee side is in the flow's shadow.
 
-Port geometry (`PortGeometry`): port i sits at cone angle lambda_i from the nose axis and clock
+Port geometry (`PortGeometry`, port_layout.py): port i sits at cone angle lambda_i from the nose axis and clock
 angle phi_i around it, phi = 0 at the bottom, 90 deg on the starboard (right) side, 180 deg at
 the top, 270 deg on the port (left) side. Its normal in FLU body axes is
     n = (cos lambda, -sin lambda sin phi, -sin lambda cos phi)
@@ -27,68 +27,12 @@ seed numbers the ports 1-5, so its P2 - P4 (used by its alpha > 45 deg test) is 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from alignment_core.air_data.flow_angles import air_direction, air_direction_partials
 from alignment_core.air_data.pitot import impact_pressure_ratio, impact_pressure_ratio_slope
-from alignment_core.validation import require
-
-
-@dataclass(frozen=True)
-class PortGeometry:
-    """Cone and clock angles (deg) of the ports, one entry per port."""
-    cone_deg: tuple[float, ...] = (0.0, 30.0, 30.0, 30.0, 30.0)
-    clock_deg: tuple[float, ...] = (0.0, 0.0, 90.0, 180.0, 270.0)
-
-    def validate(self) -> None:
-        require(len(self.cone_deg) == len(self.clock_deg) >= 3,
-                f"cone_deg and clock_deg need the same length (>= 3), got {len(self.cone_deg)}, {len(self.clock_deg)}")
-        require(all(0.0 <= c < 90.0 for c in self.cone_deg), f"cone angles must be in [0, 90) deg: {self.cone_deg}")
-
-    @property
-    def count(self) -> int:
-        return len(self.cone_deg)
-
-    @cached_property
-    def normals(self) -> np.ndarray:
-        """Outward unit normals (n, 3) in FLU body axes."""
-        lam, phi = np.deg2rad(self.cone_deg), np.deg2rad(self.clock_deg)
-        return np.stack([np.cos(lam), -np.sin(lam) * np.sin(phi), -np.sin(lam) * np.cos(phi)], axis=-1)
-
-
-@dataclass(frozen=True)
-class EpsilonCalibration:
-    """eps(M): a monotone cubic (PCHIP) through the table, held constant beyond its ends."""
-    mach: tuple[float, ...] = (0.0, 0.6, 0.9, 1.1, 1.5, 2.5, 4.0)
-    eps: tuple[float, ...] = (-0.10, -0.10, -0.05, 0.02, 0.05, 0.02, 0.0)
-
-    def validate(self) -> None:
-        require(len(self.mach) == len(self.eps) >= 2, "mach and eps need the same length (>= 2)")
-        require(all(b > a for a, b in zip(self.mach, self.mach[1:])), f"mach must increase: {self.mach}")
-        require(all(e < 1.0 for e in self.eps), f"eps must be < 1 (eps = 1 erases the angles): {self.eps}")
-
-    @classmethod
-    def constant(cls, eps: float) -> EpsilonCalibration:
-        return cls(mach=(0.0, 1.0), eps=(eps, eps))
-
-    @cached_property
-    def _curve(self) -> PchipInterpolator:
-        return PchipInterpolator(np.asarray(self.mach), np.asarray(self.eps), extrapolate=False)
-
-    def _clamped(self, mach: np.ndarray | float) -> np.ndarray:
-        return np.clip(np.asarray(mach, dtype=float), self.mach[0], self.mach[-1])
-
-    def __call__(self, mach: np.ndarray | float) -> np.ndarray:
-        return np.asarray(self._curve(self._clamped(mach)), dtype=float)
-
-    def slope(self, mach: np.ndarray | float) -> np.ndarray:
-        """d eps / dM (0 beyond the table's ends)."""
-        m = np.asarray(mach, dtype=float)
-        inside = (m > self.mach[0]) & (m < self.mach[-1])
-        return np.where(inside, self._curve.derivative()(self._clamped(m)), 0.0)
+from alignment_core.air_data.port_layout import EpsilonCalibration, PortGeometry
 
 
 def port_pressures(qc: np.ndarray | float, p_inf: np.ndarray | float, cos_sigma: np.ndarray,

@@ -34,7 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from alignment_core.air_data.atmosphere import P0, Atmosphere, DayOffsets, pressure_altitude
+from alignment_core.air_data.atmosphere import P0, Atmosphere, pressure_altitude
+from alignment_core.air_data.day_offsets import DayOffsets
 from alignment_core.air_data.flow_angles import air_angles
 from alignment_core.air_data.pitot import impact_pressure
 from alignment_core.air_data.ports import PortModel, port_pressures
@@ -123,7 +124,7 @@ class FadsStage:
         cfg.validate()
         self.cfg = cfg
         self.t0_ns = int(t0_ns)
-        self.model = cfg.port_model
+        self.model = PortModel(cfg.geometry, cfg.epsilon)
         self.n_ports = n = cfg.geometry.count
         self.wind = WindField(cfg.wind, seed) if wind is None else wind
         self.rng = stage_rng(seed, 'fads')

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from alignment_core.air_data.atmosphere import DayOffsets
-from alignment_core.air_data.ports import EpsilonCalibration, PortGeometry, PortModel
+from alignment_core.air_data.day_offsets import DayOffsets
+from alignment_core.air_data.port_layout import EpsilonCalibration, PortGeometry
 from alignment_core.aircraft.wind import WindConfig
 from alignment_core.validation import keyed_items, require
 
@@ -60,7 +60,7 @@ class FadsConfig:
     - rate_hz: frame rate (own grid from t0, not tied to the scenario rate; the period
       is rounded to whole nanoseconds: `period_ns`);
     - cone_deg, clock_deg: port geometry; eps_mach, eps: the eps(M) table (same defaults as
-      PortGeometry and EpsilonCalibration);
+      PortGeometry and EpsilonCalibration, air_data/port_layout.py);
     - sigma_pa: additive first-order Gauss-Markov noise per port (1-sigma, stationary);
       scale_sigma: multiplicative one (relative, 1-sigma); both with lag-1 correlation
       `noise_correlation` at the frame interval (seed 004's "correlation 0.5");
@@ -115,10 +115,6 @@ class FadsConfig:
     @property
     def epsilon(self) -> EpsilonCalibration:
         return EpsilonCalibration(mach=self.eps_mach, eps=self.eps)
-
-    @property
-    def port_model(self) -> PortModel:
-        return PortModel(self.geometry, self.epsilon)
 
     @property
     def period_ns(self) -> int:
