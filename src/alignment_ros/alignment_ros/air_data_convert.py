@@ -7,7 +7,7 @@ Covariances: a 6 x 6 block whose diagonal is -1 is not provided (as /alignment/a
 position and /alignment/odom's unknown axes); read back, such axes contribute nothing (0)."""
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from geometry_msgs.msg import TwistWithCovarianceStamped, Vector3Stamped
@@ -19,12 +19,14 @@ from alignment_core.estimation.air_data.inputs import InsSample
 from alignment_core.estimation.air_data.outputs import AirDataEstimate
 from alignment_core.geometry.earth import TangentPlane
 from alignment_core.geometry.rotations import quat_to_dcm
-from alignment_core.sensors.fads import FadsFrame
 from alignment_core.sensors.reference_ins import ReferenceInsSample
 
 from . import topics
 from .air_data_topics import FADS_PORT_FRAMES
 from .convert import odometry, stamp, to_ns, vector_stamped
+
+if TYPE_CHECKING:     # a type only: the sensor's module loads the atmosphere, which a node publishing none need not
+    from alignment_core.sensors.fads import FadsFrame
 
 UNKNOWN = -1.0                  # a covariance diagonal of -1: not provided
 VALUE_SIGMA = 'value|sigma'     # /air_data/state's first dimension: a row of values, a row of sigmas
