@@ -17,6 +17,7 @@ something: it finds a violation, a cycle and a ROS import where there is one.
 from __future__ import annotations
 
 import ast
+import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -308,3 +309,14 @@ def test_checker_finds_ros_imports(tmp_path):
     assert {(i.module, i.target) for i in ros_imports(imports)} == {
         ('pkg.estimation.models', 'rclpy'), ('pkg.ship.motion', 'geometry_msgs.msg'),
         ('pkg.ship.motion', 'alignment_ros')}
+
+
+def test_the_alignment_pipeline_does_not_load_the_atmosphere():
+    # a scenario names the day's offsets and the port layout (air_data/day_offsets.py,
+    # port_layout.py); the atmosphere (ambiance, scipy.optimize) and the PCHIP table
+    # (scipy.interpolate) load only where air data is simulated or estimated
+    probe = ('import sys, alignment_core.pipeline, alignment_core.config.scenario as s; s.load("deck").validate(); '
+             'print(sorted(m for m in ("ambiance", "scipy.optimize", "scipy.interpolate", '
+             '"alignment_core.air_data.atmosphere") if m in sys.modules))')
+    out = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == '[]'
