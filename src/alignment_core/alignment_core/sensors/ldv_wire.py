@@ -37,15 +37,31 @@ def encode(s: LdvSample) -> tuple[np.ndarray, np.ndarray]:
 
 def decode(t_ns: int, linear: np.ndarray, cov: np.ndarray) -> LdvSample:
     """The LdvSample of a velocity (3,) and its linear covariance (3, 3) (`encode`)."""
-    c0 = float(cov[0, 0])
-    v = np.array(linear, dtype=float)
-    if not c0 >= 0.0:
-        return LdvSample(t_ns=t_ns, v_s=v, sigma=math.nan, valid=False)
-    trace = float(np.trace(cov))
-    w, vec = np.linalg.eigh(0.5 * (cov + cov.T)) if np.all(np.isfinite(cov)) else (None, None)
-    if w is not None and trace > 0.0 and w[1] <= BEAM_RANK_TOLERANCE * trace:
-        return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(trace), valid=True, beam=vec[:, 2])
-    return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(c0), valid=True)
+    return decode_all([t_ns], np.asarray(linear, dtype=float)[None], np.asarray(cov, dtype=float)[None])[0]
+
+
+def decode_all(t_ns: list[int], linear: np.ndarray, cov: np.ndarray) -> list[LdvSample]:
+    """The LdvSamples of velocities (N, 3) and their linear covariances (N, 3, 3), the
+    covariances decomposed as one stack (eigh solves each matrix on its own: the same bits as
+    one by one)."""
+    c0 = cov[:, 0, 0]
+    valid = c0 >= 0.0                                   # NaN: not valid
+    trace = cov[:, 0, 0] + cov[:, 1, 1] + cov[:, 2, 2]
+    finite = np.isfinite(cov).all(axis=(1, 2)) & valid
+    w = np.zeros((len(cov), 3))
+    vec = np.zeros((len(cov), 3, 3))
+    if finite.any():
+        w[finite], vec[finite] = np.linalg.eigh(0.5 * (cov[finite] + cov[finite].transpose(0, 2, 1)))
+    out = []
+    for i, t in enumerate(t_ns):
+        v = np.array(linear[i], dtype=float)
+        if not valid[i]:
+            out.append(LdvSample(t_ns=t, v_s=v, sigma=math.nan, valid=False))
+        elif finite[i] and trace[i] > 0.0 and w[i, 1] <= BEAM_RANK_TOLERANCE * trace[i]:
+            out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(trace[i]), valid=True, beam=vec[i, :, 2]))
+        else:
+            out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(c0[i]), valid=True))
+    return out
 
 
 def transmitted(s: LdvSample) -> LdvSample:
@@ -54,34 +70,8 @@ def transmitted(s: LdvSample) -> LdvSample:
 
 
 def transmitted_all(samples: list[LdvSample]) -> list[LdvSample]:
-    """`transmitted` of every sample, the covariances decomposed as one stack (a batch run's
-    whole LDV stream; the same bits as sample by sample: eigh solves each matrix on its own)."""
-    n = len(samples)
-    if n == 0:
+    """`transmitted` of every sample (a batch run's whole LDV stream, decoded as one stack)."""
+    if not samples:
         return []
-    var = np.array([s.sigma**2 for s in samples], dtype=float)     # as encode squares it
-    valid = np.array([s.valid for s in samples], dtype=bool)
-    has_beam = np.array([s.beam is not None for s in samples], dtype=bool) & valid
-    beams = np.array([s.beam if b else (0.0, 0.0, 0.0) for s, b in zip(samples, has_beam)], dtype=float)
-    cov = np.zeros((n, 3, 3))
-    vector = valid & ~has_beam
-    for i in range(3):
-        cov[vector, i, i] = var[vector]
-    cov[has_beam] = var[has_beam, None, None] * (beams[has_beam, :, None] * beams[has_beam, None, :])
-    cov[~valid, 0, 0] = -1.0
-    trace = cov[:, 0, 0] + cov[:, 1, 1] + cov[:, 2, 2]
-    finite = np.isfinite(cov).all(axis=(1, 2)) & valid
-    w = np.zeros((n, 3))
-    vec = np.zeros((n, 3, 3))
-    if finite.any():
-        w[finite], vec[finite] = np.linalg.eigh(0.5 * (cov[finite] + cov[finite].transpose(0, 2, 1)))
-    out = []
-    for i, s in enumerate(samples):
-        v = np.array(s.v_s, dtype=float)
-        if not valid[i]:
-            out.append(LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.nan, valid=False))
-        elif finite[i] and trace[i] > 0.0 and w[i, 1] <= BEAM_RANK_TOLERANCE * trace[i]:
-            out.append(LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.sqrt(trace[i]), valid=True, beam=vec[i, :, 2]))
-        else:
-            out.append(LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.sqrt(cov[i, 0, 0]), valid=True))
-    return out
+    wire = [encode(s) for s in samples]
+    return decode_all([s.t_ns for s in samples], np.array([w[0] for w in wire]), np.array([w[1] for w in wire]))
