@@ -75,6 +75,21 @@ def _shm_files(pid: int) -> set[Path]:
     return {Path(n) for n in names if n.startswith('/dev/shm/') and 'fastrtps' in n}
 
 
+def _holders(paths: list[Path]) -> str:
+    """Which processes map the paths (for a failure's message: who kept a dead one's file)."""
+    out = []
+    for proc in Path('/proc').iterdir():
+        try:
+            maps = (proc / 'maps').read_text() if proc.name.isdigit() else ''
+            who = (proc / 'cmdline').read_bytes().replace(b'\0', b' ').decode(errors='replace')[:120]
+        except OSError:
+            continue
+        hit = [p.name for p in paths if str(p) in maps]
+        if hit:
+            out.append(f'pid {proc.name} ({"this test" if int(proc.name) == os.getpid() else who}) maps {hit}')
+    return f'kept {[p.name for p in paths]}; ' + ('; '.join(out) or 'mapped by none (locked?)')
+
+
 def test_files_of_a_killed_participant_go_those_of_a_live_one_stay():
     dead, d1 = _participant()
     live, d2 = _participant()
@@ -91,7 +106,8 @@ def test_files_of_a_killed_participant_go_those_of_a_live_one_stay():
             if shm_cleanup.group_of(p.name) in groups:
                 os.utime(p, (OLD, OLD))
         shm_cleanup.clean_stale()
-        assert not [p for p in left if p.exists()]
+        kept = [p for p in left if p.exists()]
+        assert not kept, _holders(kept)
         assert all(p.exists() for p in live_files), live_files
         assert live.poll() is None
     finally:

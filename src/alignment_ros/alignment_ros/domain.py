@@ -6,7 +6,10 @@ graph runs, replays and tests never hear each other. A launcher hands the lock's
 the processes it starts (:func:`lock_fd`, ``Popen(pass_fds=...)``): the lock is one open file
 shared by all of them, so the domain stays claimed until the last process of the run is gone.
 Which domain (`for_run`): the one asked for (--domain-id), else an exported ROS_DOMAIN_ID, else
-a free one of 1..101 (valid for Fast DDS with default ports on Linux), tried in a random order.
+a free one of 1..101 (valid for Fast DDS with default ports on Linux), tried in a random order,
+those this process has released last and the longest released first: a participant of the
+process can outlive the release (rclpy keeps it while a node of it exists) and would meet the
+domain's next user.
 """
 from __future__ import annotations
 
@@ -14,6 +17,7 @@ import fcntl
 import os
 import random
 import re
+import time
 from pathlib import Path
 from typing import TextIO
 
@@ -22,6 +26,7 @@ DOMAINS = tuple(range(1, 102))
 MAX_DOMAIN = 232    # rmw's limit on any platform (Fast DDS port arithmetic)
 
 _held: dict[int, TextIO] = {}
+_released: dict[int, float] = {}      # domain -> when this process released it (monotonic s)
 
 
 def claim(preferred: int | None = None) -> int:
@@ -30,6 +35,7 @@ def claim(preferred: int | None = None) -> int:
     LOCK_DIR.mkdir(parents=True, exist_ok=True)
     order = list(DOMAINS)
     random.Random(os.getpid() ^ int.from_bytes(os.urandom(4), 'little')).shuffle(order)
+    order.sort(key=lambda d: (d in _released, _released.get(d, 0.0)))
     if preferred is not None:
         order.insert(0, preferred)
     for dom in order:
@@ -57,9 +63,11 @@ def lock_fd(dom: int) -> int:
 
 
 def release(dom: int) -> None:
+    """Give the domain back (claimed again by this process last: see the module docstring)."""
     f = _held.pop(dom, None)
     if f is not None:
         f.close()
+        _released[dom] = time.monotonic()
 
 
 def from_environment() -> int | None:
