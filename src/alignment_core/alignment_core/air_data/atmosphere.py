@@ -43,8 +43,6 @@ _LAYERS = tuple((float(d['H_base']), float(d['T']), float(d['beta']))
 _H_MIN, _H_MAX = _LAYERS[0][0], float(ambiance.CONST.LAYER_DICTS[len(_LAYERS)]['H_top'])
 
 
-
-
 def geopotential_height(h: np.ndarray | float) -> np.ndarray:
     """Geopotential height H = r0 h / (r0 + h) of geometric height h (m)."""
     h = np.asarray(h, dtype=float)
