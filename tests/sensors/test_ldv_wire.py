@@ -49,6 +49,8 @@ def _decoded_alone(s: LdvSample) -> LdvSample:
     if not cov[0, 0] >= 0.0:
         return LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.nan, valid=False)
     trace = float(np.trace(cov))
+    if not np.all(np.isfinite(cov)):
+        return LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.sqrt(cov[0, 0]), valid=True)
     w, vec = np.linalg.eigh(0.5 * (cov + cov.T))
     if trace > 0.0 and w[1] <= ldv_wire.BEAM_RANK_TOLERANCE * trace:
         return LdvSample(t_ns=s.t_ns, v_s=v, sigma=math.sqrt(trace), valid=True, beam=vec[:, 2])
@@ -66,6 +68,12 @@ def _same_bits(a: LdvSample, b: LdvSample) -> None:
 
 def test_a_stream_decodes_to_the_bits_of_each_matrix_decomposed_alone():
     samples = _samples()
+    u = np.array([0.6, -0.48, 0.64])
+    for stream in ([], samples[:3]):    # a covariance that is not finite: decomposed by none
+        mixed = stream + [LdvSample(t_ns=-1, v_s=u, sigma=math.inf, valid=True, beam=u),
+                          LdvSample(t_ns=-2, v_s=u, sigma=math.inf, valid=True)]
+        for a, s in zip(ldv_wire.transmitted_all(mixed), mixed):
+            _same_bits(a, _decoded_alone(s))
     stream = ldv_wire.transmitted_all(samples)
     assert len(stream) == len(samples)
     for a, s in zip(stream, samples):

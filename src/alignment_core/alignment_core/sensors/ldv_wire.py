@@ -47,11 +47,13 @@ def decode_all(t_ns: list[int], linear: np.ndarray, cov: np.ndarray) -> list[Ldv
     c0 = cov[:, 0, 0]
     valid = c0 >= 0.0                                   # NaN: not valid
     trace = cov[:, 0, 0] + cov[:, 1, 1] + cov[:, 2, 2]
-    finite = np.isfinite(cov).all(axis=(1, 2)) & valid
-    w = np.zeros((len(cov), 3))
-    vec = np.zeros((len(cov), 3, 3))
-    if finite.any():
-        w[finite], vec[finite] = np.linalg.eigh(0.5 * (cov[finite] + cov[finite].transpose(0, 2, 1)))
+    finite = np.isfinite(cov).all(axis=(1, 2))
+    if finite.all():                                    # the usual case: no masks
+        w, vec = np.linalg.eigh(0.5 * (cov + cov.transpose(0, 2, 1)))
+    else:
+        w, vec = np.zeros((len(cov), 3)), np.zeros((len(cov), 3, 3))
+        if finite.any():
+            w[finite], vec[finite] = np.linalg.eigh(0.5 * (cov[finite] + cov[finite].transpose(0, 2, 1)))
     out = []
     for i, t in enumerate(t_ns):
         v = np.array(linear[i], dtype=float)
