@@ -91,8 +91,8 @@ print(anon_kib() - before)
 
 @pytest.mark.skipif(not Path('/proc/self/status').exists(), reason='needs /proc')
 def test_a_buffer_is_resident_when_made_not_page_by_page_as_it_first_fills():
-    # 8192 rows of 24 floats are 1.5 MiB: left unwritten until rows reach them, half of it
-    # (768 KiB) would become resident while the rows below fill it; written when made, none
+    # 8192 rows of 24 floats are 1.5 MiB: left unwritten until rows reach them, the 4000 rows'
+    # 750 KiB would become resident as they land; written when made, none
     env = {k: v for k, v in os.environ.items() if not k.startswith(('MALLOC_', 'GLIBC_TUNABLES'))}
     out = subprocess.run([sys.executable, '-c', _FILL_PROBE], capture_output=True, text=True, env=env, check=True)
     assert int(out.stdout) < 8192 * 24 * 8 / 1024 / 2 / 4

@@ -5,10 +5,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from alignment_core.validation import require
+
+if TYPE_CHECKING:
+    from scipy.interpolate import PchipInterpolator
 
 
 @dataclass(frozen=True)
@@ -49,7 +53,7 @@ class EpsilonCalibration:
         return cls(mach=(0.0, 1.0), eps=(eps, eps))
 
     @cached_property
-    def _curve(self):
+    def _curve(self) -> PchipInterpolator:
         from scipy.interpolate import PchipInterpolator  # not at import: a scenario's config loads this module
         return PchipInterpolator(np.asarray(self.mach), np.asarray(self.eps), extrapolate=False)
 

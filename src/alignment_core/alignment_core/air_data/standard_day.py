@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from alignment_core.air_data.atmosphere import _LAYERS, G0, P0, R_AIR, STANDARD_DAY, _pressure, geopotential_height
+from alignment_core.air_data.atmosphere import _LAYERS, G0, P0, R_AIR, _pressure, geopotential_height
+from alignment_core.air_data.day_offsets import STANDARD_DAY
 
 _BASE_H = np.array([lay[0] for lay in _LAYERS])
 _BASE_T = np.array([lay[1] for lay in _LAYERS])
