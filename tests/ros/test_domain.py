@@ -135,3 +135,39 @@ def test_a_released_domain_is_claimed_again_last_the_longest_released_first():
     assert first not in held and len(set(held)) == 10
     assert len(fresh) >= 50                         # every unused domain first (all but those other runs hold)
     assert again == first or _locked(first)        # unless another run took it meanwhile
+
+
+_LINGER_PROBE = """
+import fcntl
+import gc
+import rclpy
+from rclpy.context import Context
+from alignment_ros import domain
+
+def locked(dom):
+    with open(domain.LOCK_DIR / f'{dom}.lock', 'w') as f:
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            return True
+        fcntl.flock(f, fcntl.LOCK_UN)
+        return False
+
+dom = domain.claim()
+ctx = Context()
+rclpy.init(context=ctx, domain_id=dom)
+node = rclpy.create_node('lingering', context=ctx)
+rclpy.try_shutdown(context=ctx)
+domain.release(dom)                 # the node, and so its participant, still alive
+kept = locked(dom)
+node.destroy_node()
+del node, ctx
+gc.collect()
+other = domain.claim()              # a claim lets go what is no longer in use
+print(kept, locked(dom), other != dom)
+"""
+
+
+def test_a_domain_is_let_go_only_once_no_participant_of_the_process_is_left_on_it():
+    out = subprocess.run([sys.executable, '-c', _LINGER_PROBE], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ['True', 'False', 'True']
