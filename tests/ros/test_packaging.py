@@ -43,6 +43,7 @@ PYTHON_KEYS = {
     'zstandard': 'mcap-ros2-support',
     # no key in ros/rosdistro: the project's own rosdep/python.yaml defines it (README: add it to rosdep)
     'ambiance': 'python3-ambiance-pip',
+    'setproctitle': 'python3-setproctitle-pip',
 }
 # ROS packages of Jazzy the code may import (import name = package name = rosdep key)
 ROS_PACKAGES = {'rclpy', 'rcl_interfaces', 'builtin_interfaces', 'ament_index_python', 'rosidl_parser',
@@ -272,9 +273,12 @@ def test_every_test_file_is_run_by_colcon_test():
 
 
 def test_keys_not_in_rosdistro_are_defined_by_the_projects_rosdep_file():
-    """python3-ambiance-pip is the project's own key: rosdep/python.yaml must define it as a pip
-    install of the distribution, for the platforms a Jazzy user runs."""
+    """python3-ambiance-pip and python3-setproctitle-pip are the project's own keys:
+    rosdep/python.yaml must define each as a pip install of the distribution, for the platforms
+    a Jazzy user runs."""
     import yaml
     own = yaml.safe_load((ROOT / 'rosdep' / 'python.yaml').read_text())
     assert own['python3-ambiance-pip']['ubuntu']['pip']['packages'] == ['ambiance']
     assert own['python3-ambiance-pip']['debian']['pip']['packages'] == ['ambiance']
+    for os_name in ('ubuntu', 'debian'):
+        assert own['python3-setproctitle-pip'][os_name]['pip']['packages'] == ['setproctitle']

@@ -203,3 +203,26 @@ def test_the_slave_attitude_is_scored_at_its_own_stamp(tmp_path):
     assert s['attitude_error_rad'] == pytest.approx([0.0, 0.0, -1e-3], abs=1e-12)
     assert s['attitude_sigma_rad'] == pytest.approx([1e-4, 2e-4, 3e-4])
     assert 'slave attitude error' in summary.table(s)
+
+
+def test_a_bag_cut_between_an_outputs_two_messages_pairs_what_it_holds_of_both(tmp_path):
+    """A killed recorder can keep an output's misalignment without its state: the estimates are
+    the outputs the bag holds both messages of, and the last of them is scored."""
+    path = tmp_path / 'bag'
+    with BagWriter(path) as w:
+        w.add_topic('/truth/misalignment', 'geometry_msgs/msg/Vector3Stamped')
+        w.add_topic('/alignment/misalignment', 'geometry_msgs/msg/Vector3Stamped')
+        w.add_topic('/alignment/state', 'std_msgs/msg/Float64MultiArray')
+        for k in range(11):
+            w.write('/truth/misalignment', vec(NS + k * NS // 10, TRUTH), NS + k * NS // 10)
+        for k in range(10):
+            t = NS + k * NS // 10
+            w.write('/alignment/misalignment', vec(t, [x + 1e-3 for x in TRUTH]), t)
+            if k < 9:                                  # the last output's state never recorded
+                w.write('/alignment/state', state(), t)
+    e = summary.estimates_from_bag(path)
+    assert len(e['t_ns']) == len(e['misalignment']) == len(e['sigma']) == 9
+    s = summary.summarise(path, path, 1.0, 1.0, 1.0,
+                          {'/truth/misalignment': 11, '/alignment/misalignment': 10, '/alignment/state': 9})
+    assert s['estimate_stamp_s'] == pytest.approx(1.8)
+    assert s['misalignment_sigma_rad'] == pytest.approx([0.002] * 3)

@@ -1,8 +1,10 @@
 """Run the whole node graph for a scenario: recorder, filter, LDV, slave, master, ship.
 
-Each node is a separate process started through scripts/start_node.sh with one params file:
-the scenario as given (its file's keys and --set), which each node resolves itself (params.py);
-the resolved scenario is written next to it (scenario.yaml). The ship node starts the clock
+Each node is a separate process with one params file: the scenario as given (its file's keys
+and --set), which each node resolves itself (params.py); the resolved scenario is written next
+to it (scenario.yaml). The nodes are forked from this launcher once it has imported their code
+(:mod:`alignment_ros.forked`), with the command line scripts/start_node.sh would exec (which
+starts them where this process cannot fork), and before the recorder. The ship node starts the clock
 once every subscription is matched and runs on past the scenario's end for the run-out
 (alignment_core/run_out.py: a sensor with its own rate, latency or jitter would otherwise stop
 short of the end, and the filter's outputs with it). When every stream of END_TOPICS has
@@ -32,7 +34,7 @@ import yaml
 from alignment_core.config import scenario as core_scenario
 from alignment_core.validation import ConfigError
 
-from . import summary, topics
+from . import forked, summary, topics
 from .bag import BagError
 from .launch import (
     OneLineParser,
@@ -159,14 +161,22 @@ def write_params(given: dict, sc: core_scenario.Scenario, path: Path) -> None:
 
 
 def start(run: Run, name: str, params: Path, *args: str,
-          matched: dict[str, dict[str, tuple[str, ...]]] = MATCHED) -> subprocess.Popen:
-    """Start a node of the run through scripts/start_node.sh, its output to logs/NAME.log."""
+          matched: dict[str, dict[str, tuple[str, ...]]] = MATCHED,
+          fork: bool = False) -> subprocess.Popen | forked.ForkedProcess:
+    """Start a node of the run, its output to logs/NAME.log: through scripts/start_node.sh, or
+    with `fork` as a fork of this launcher (:mod:`alignment_ros.forked`) with the command line
+    start_node.sh would exec."""
     out = run.out
     log = open(out / 'logs' / f'{name}.log', 'w')
-    cmd = [str(root() / 'scripts' / 'start_node.sh'), name, '--params-file', str(params),
-           '--ros-args', '-p', f'stats_path:={out / "stats" / (name + ".json")}', *args]
+    ros_args = ['-p', f'stats_path:={out / "stats" / (name + ".json")}', *args]
     if name in matched and not any('hold_until_matched' in x for x in args):
-        cmd += ['-p', _list_param('hold_until_matched', matched[name])]
+        ros_args += ['-p', _list_param('hold_until_matched', matched[name])]
+    if fork:
+        exe = root() / 'ros2_ws' / 'install' / name / 'lib' / name / name
+        argv = [str(exe), '--ros-args', '--params-file', str(params), '-p', 'use_sim_time:=true', *ros_args]
+        with log:
+            return run.fork(name, forked.entry_point(name), argv, log)
+    cmd = [str(root() / 'scripts' / 'start_node.sh'), name, '--params-file', str(params), '--ros-args', *ros_args]
     return run.spawn(name, cmd, stdout=log, stderr=subprocess.STDOUT)
 
 
@@ -220,9 +230,13 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
     params = out / 'params.yaml'
     write_params(given, sc, params)
     live = LiveProgress('run_graph', sc.duration_s, sc.start_time_s, quiet=a.quiet)
-    wall = _run(run, a, sc, params, live)
-    run.end(out / 'bag')
-    s = _summary(run, sc, wall, started)
+    try:
+        wall = _run(run, a, sc, params, live)
+        run.end(out / 'bag')
+        s = _summary(run, sc, wall, started)
+    except BaseException:
+        live.watcher.stop()     # a participant left running aborts the interpreter's exit
+        raise
     live.close(s if run.interrupted is None else None)
     if not a.no_plots and run.interrupted is None:
         from . import run_report  # matplotlib, scipy.stats: loaded for the report, not at start-up
@@ -247,16 +261,23 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
     try:
         matched = matched_of(sc)
         expect = out / 'stats' / 'published.json'
+        # the nodes first, forked while this process runs no other thread (the recorder's
+        # reader and the progress line start below); they hold their messages until the
+        # recorder has matched
+        fork = forked.unsafe_reason() is None
+        if fork:
+            for n in (*nodes_of(sc), 'ship_motion_node'):
+                forked.entry_point(n)      # every node's imports once, before the first fork
+        for n in nodes_of(sc):
+            start(run, n, params, matched=matched, fork=fork)
+        start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',
+              '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']),
+              '-p', 'pace_topics:=[' + ','.join(f'"{t}"' for t in pace_topics_of(sc)) + ']',
+              '-p', f'max_lead_s:={max_lead_of(sc)}', fork=fork)
         rec = start_recorder(run, out / 'bag', end_s, recorded_of(sc), end_topics_of(sc), expect_counts=expect,
                              progress_topic=topics.RECORDER_PROGRESS)
         end_reached = watch_end_time(rec, live.recorded)
         live.start()
-        for n in nodes_of(sc):
-            start(run, n, params, matched=matched)
-        start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',
-              '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']),
-              '-p', 'pace_topics:=[' + ','.join(f'"{t}"' for t in pace_topics_of(sc)) + ']',
-              '-p', f'max_lead_s:={max_lead_of(sc)}')
         timeout = a.timeout or 120.0 + 3.0 * sc.duration_s
         deadline = time.monotonic() + timeout
         while rec.poll() is None and not end_reached.is_set():

@@ -21,9 +21,11 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import IO
 
-from . import bag_reindex, domain
+from . import bag_reindex, domain, forked
 from .bag import BagError
 from .signals import Interrupted, SignalGuard, die_with_parent
 
@@ -73,7 +75,7 @@ class Run:
         self.prog = prog
         self.out = out
         self.guard = guard
-        self.procs: dict[str, subprocess.Popen] = {}
+        self.procs: dict[str, subprocess.Popen | forked.ForkedProcess] = {}
         self.problems: list[str] = []
         self.repaired: bag_reindex.Reindexed | None = None
         self.interrupted: Interrupted | None = None
@@ -100,6 +102,14 @@ class Run:
         with self.guard.deferred():
             p = subprocess.Popen(cmd, start_new_session=True, pass_fds=self._fds,
                                  preexec_fn=self._preexec, **kw)
+            self.procs[name] = p
+        return p
+
+    def fork(self, name: str, entry: Callable[[], object], argv: list[str], log: IO) -> forked.ForkedProcess:
+        """Start a node of the run as a fork of this process (:mod:`alignment_ros.forked`): what
+        :meth:`spawn` gives an exec'd one, without the node's imports."""
+        with self.guard.deferred():
+            p = forked.fork_node(entry, argv, log, self._fds, self._preexec)
             self.procs[name] = p
         return p
 

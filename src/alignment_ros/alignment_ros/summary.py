@@ -45,12 +45,16 @@ def _read(bag: Path, names: tuple[str, ...]) -> dict[str, list]:
 
 
 def estimates_from_bag(bag: Path) -> dict[str, np.ndarray]:
-    """t_ns (N,), misalignment (N, 3), sigma (N, 3) from a bag of filter outputs."""
+    """t_ns (N,), misalignment (N, 3), sigma (N, 3) from a bag of filter outputs. The filter
+    publishes one of each topic per output, in order; a bag cut short (a killed recorder) may
+    hold one more of either: N is the outputs it holds both of."""
     d = _read(bag, (topics.ALIGN_MISALIGNMENT, topics.ALIGN_STATE))
-    t = np.array([to_ns(m.header.stamp) for m in d[topics.ALIGN_MISALIGNMENT]], dtype=np.int64)
-    mu = np.array([[m.vector.x, m.vector.y, m.vector.z] for m in d[topics.ALIGN_MISALIGNMENT]])
+    n_out = min(len(d[topics.ALIGN_MISALIGNMENT]), len(d[topics.ALIGN_STATE]))
+    vectors = d[topics.ALIGN_MISALIGNMENT][:n_out]
+    t = np.array([to_ns(m.header.stamp) for m in vectors], dtype=np.int64)
+    mu = np.array([[m.vector.x, m.vector.y, m.vector.z] for m in vectors])
     sig = []
-    for m in d[topics.ALIGN_STATE]:
+    for m in d[topics.ALIGN_STATE][:n_out]:
         n = m.layout.dim[1].size
         sig.append(np.asarray(m.data[3 * n:3 * n + 3]))
     return {'t_ns': t, 'misalignment': mu.reshape(-1, 3), 'sigma': np.array(sig).reshape(-1, 3)}
