@@ -367,6 +367,7 @@ def test_recorder_records_every_message(tmp_path: Path, ros_context: Context) ->
     st = json.loads(stats.read_text())
     assert st['end_reason'] == 'end_time'
     assert st['topics'] == {'/aircraft/imu': n, '/clock': 0}
+    assert 0.0 < st['cpu_s'] < 60.0        # the recorder's own CPU time, as a node's stats give it
     assert st['last_stamp_ns']['/aircraft/imu'] == stamp_ns(msgs[-1])
     assert (bag / 'metadata.yaml').is_file()
     assert topic_counts(bag) == {'/aircraft/imu': n, '/clock': 0}

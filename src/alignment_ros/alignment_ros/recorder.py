@@ -386,6 +386,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
         'receive_span_s': span,
         'first_message_unix_s': rec.first_rx_unix,
         'receive_rate_msg_s': total / span if span > 0 else None,
+        'cpu_s': time.process_time(),
         'reorder': {'peak_bytes': writer.reorder.peak_bytes,
                     'peak_messages': writer.reorder.peak_messages, 'late': writer.reorder.late},
     }
