@@ -27,9 +27,11 @@ def vec(t_ns: int, v) -> bytes:
     return serialize_message(m)
 
 
-def state() -> bytes:
+def state(t_ns: int, sigma: float = 0.002) -> bytes:
+    """/alignment/state of the output at t_ns: its stamp in the first row, the misalignment's
+    sigma in the fourth."""
     n = 3
-    m = Float64MultiArray(data=[0.0] * (3 * n) + [0.002] * 3)
+    m = Float64MultiArray(data=[t_ns * 1e-9] * n + [0.0] * (2 * n) + [sigma] * 3)
     m.layout.dim = [MultiArrayDimension(label='rows', size=4), MultiArrayDimension(label='n', size=n)]
     return serialize_message(m)
 
@@ -53,7 +55,7 @@ def write_bag(path: Path, truths: list, estimates: list, more=None) -> Path:
         for k, v in enumerate(estimates):
             t = NS + k * NS // 10
             w.write('/alignment/misalignment', vec(t, v), t)
-            w.write('/alignment/state', state(), t)
+            w.write('/alignment/state', state(t), t)
     return path
 
 
@@ -219,10 +221,28 @@ def test_a_bag_cut_between_an_outputs_two_messages_pairs_what_it_holds_of_both(t
             t = NS + k * NS // 10
             w.write('/alignment/misalignment', vec(t, [x + 1e-3 for x in TRUTH]), t)
             if k < 9:                                  # the last output's state never recorded
-                w.write('/alignment/state', state(), t)
+                w.write('/alignment/state', state(t), t)
     e = summary.estimates_from_bag(path)
     assert len(e['t_ns']) == len(e['misalignment']) == len(e['sigma']) == 9
     s = summary.summarise(path, path, 1.0, 1.0, 1.0,
                           {'/truth/misalignment': 11, '/alignment/misalignment': 10, '/alignment/state': 9})
     assert s['estimate_stamp_s'] == pytest.approx(1.8)
     assert s['misalignment_sigma_rad'] == pytest.approx([0.002] * 3)
+
+
+def test_a_state_recorded_out_of_order_is_paired_with_its_own_output(tmp_path):
+    """/alignment/state has no header: its log time is when it arrived. Six states recorded
+    late (a reader matched while outputs already flowed) still pair with their own outputs."""
+    path = tmp_path / 'bag'
+    order = [*range(0, 4), *range(10, 16), *range(4, 10), *range(16, 20)]
+    with BagWriter(path) as w:
+        w.add_topic('/alignment/misalignment', 'geometry_msgs/msg/Vector3Stamped')
+        w.add_topic('/alignment/state', 'std_msgs/msg/Float64MultiArray')
+        for k in range(20):
+            t = NS + k * NS // 10
+            w.write('/alignment/misalignment', vec(t, TRUTH), t)
+        for i, k in enumerate(order):
+            w.write('/alignment/state', state(NS + k * NS // 10, sigma=1e-3 * (k + 1)), NS + i * NS // 10)
+    e = summary.estimates_from_bag(path)
+    assert list(e['t_ns']) == [NS + k * NS // 10 for k in range(20)]
+    assert e['sigma'][:, 0] == pytest.approx([1e-3 * (k + 1) for k in range(20)])

@@ -63,3 +63,19 @@ def test_the_whiteness_of_the_filters_last_diagnostics(tmp_path):
     assert wh == {'result': 'fail', 'relative_velocity': 'zero (no LDV stream)', 'q': 812.5, 'p': 1e-150,
                   'r1_max': 0.91, 'band': 0.08765, 'dof': 30, 'windows': 7, 'windows_failed': 6}
     assert summary.whiteness_line(wh).startswith('innovation whiteness: fail (last window: Ljung-Box p 1e-150')
+
+
+def test_states_recorded_out_of_order_are_read_by_their_stamps(tmp_path):
+    """A state that arrived late (log time after later outputs') is still the one at its stamp."""
+    bag = tmp_path / 'bag'
+    with BagWriter(bag) as w:
+        w.add_topic('/alignment/state', 'std_msgs/msg/Float64MultiArray')
+        for i, k in enumerate((0, 3, 4, 1, 2)):
+            t = NS + k * NS // 10
+            msg = serialize_message(convert.state_msg(_estimate(t, k), LABELS))
+            w.write('/alignment/state', msg, NS + i * NS // 10)
+    at = summary.state_estimate(bag, 1.2)
+    assert at is not None and abs(at['t_s'] - 1.2) < 1e-9
+    np.testing.assert_allclose(at['estimate'], [0.0, 2e-5, 0.04])
+    last = summary.state_estimate(bag)
+    assert last is not None and abs(last['t_s'] - 1.4) < 1e-9

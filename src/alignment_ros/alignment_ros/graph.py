@@ -4,7 +4,7 @@ Each node is a separate process with one params file: the scenario as given (its
 and --set), which each node resolves itself (params.py); the resolved scenario is written next
 to it (scenario.yaml). The nodes are forked from this launcher once it has imported their code
 (:mod:`alignment_ros.forked`), with the command line scripts/start_node.sh would exec (which
-starts them where this process cannot fork), and before the recorder. The ship node starts the clock
+starts them where this process cannot fork), beside the recorder. The ship node starts the clock
 once every subscription is matched and runs on past the scenario's end for the run-out
 (alignment_core/run_out.py: a sensor with its own rate, latency or jitter would otherwise stop
 short of the end, and the filter's outputs with it). When every stream of END_TOPICS has
@@ -47,6 +47,7 @@ from .launch import (
     root,
     start_recorder,
     unpaired_drops,
+    wait_ready,
     watch_end_time,
 )
 from .params import given_parameters
@@ -261,9 +262,12 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
     try:
         matched = matched_of(sc)
         expect = out / 'stats' / 'published.json'
-        # the nodes first, forked while this process runs no other thread (the recorder's
-        # reader and the progress line start below); they hold their messages until the
-        # recorder has matched
+        # the recorder's process first and the nodes beside it, all discovering each other from
+        # their start (a reader found while data already flows may get a message of a topic out
+        # of order), forked while this process runs no other thread (the recorder's reader and
+        # the progress line start after them); then the recorder's ready line
+        rec = start_recorder(run, out / 'bag', end_s, recorded_of(sc), end_topics_of(sc), expect_counts=expect,
+                             progress_topic=topics.RECORDER_PROGRESS, wait=False)
         fork = forked.unsafe_reason() is None
         if fork:
             for n in (*nodes_of(sc), 'ship_motion_node'):
@@ -274,8 +278,7 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
               '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']),
               '-p', 'pace_topics:=[' + ','.join(f'"{t}"' for t in pace_topics_of(sc)) + ']',
               '-p', f'max_lead_s:={max_lead_of(sc)}', fork=fork)
-        rec = start_recorder(run, out / 'bag', end_s, recorded_of(sc), end_topics_of(sc), expect_counts=expect,
-                             progress_topic=topics.RECORDER_PROGRESS)
+        wait_ready(run, rec)
         end_reached = watch_end_time(rec, live.recorded)
         live.start()
         timeout = a.timeout or 120.0 + 3.0 * sc.duration_s

@@ -213,10 +213,12 @@ def _status(rc: int | None) -> str:
 
 
 def start_recorder(run: Run, bag: Path, end_time_s: float, topic_list, wait_topics,
-                   expect_counts: Path | None = None, progress_topic: str | None = None) -> subprocess.Popen:
+                   expect_counts: Path | None = None, progress_topic: str | None = None,
+                   wait: bool = True) -> subprocess.Popen:
     """Start the recorder (no idle timeout: the run decides when it ends) and wait for its
-    ``ready`` line. With expect_counts it records, after end-time, until every topic has the
-    count that file gives (see :func:`finish_recording`)."""
+    ``ready`` line (`wait` False: :func:`wait_ready` later). With expect_counts it records,
+    after end-time, until every topic has the count that file gives (see
+    :func:`finish_recording`)."""
     out = run.out
     cmd = [str(root() / 'ros2_ws/install/alignment_ros/lib/alignment_ros/recorder'),
            '--output', str(bag), '--node-name', 'recorder', '--idle-timeout', '0',
@@ -229,14 +231,21 @@ def start_recorder(run: Run, bag: Path, end_time_s: float, topic_list, wait_topi
                 '--expect-timeout', repr(RECORDER_EXPECT_TIMEOUT_S)]
     p = run.spawn('recorder', cmd, stdout=subprocess.PIPE,
                   stderr=open(out / 'logs' / 'recorder.log', 'w'), text=True)
-    assert p.stdout is not None
+    if wait:
+        wait_ready(run, p)
+    return p
+
+
+def wait_ready(run: Run, recorder: subprocess.Popen) -> None:
+    """Read the recorder's output up to its ``ready`` line (RuntimeError if it does not come)."""
+    assert recorder.stdout is not None
     deadline = time.monotonic() + 60
-    for line in p.stdout:
+    for line in recorder.stdout:
         if 'ready' in line:
-            return p
+            return
         if time.monotonic() > deadline:
             break
-    raise RuntimeError(f'the recorder did not become ready; see {out}/logs/recorder.log')
+    raise RuntimeError(f'the recorder did not become ready; see {run.out}/logs/recorder.log')
 
 
 def watch_end_time(recorder: subprocess.Popen, on_progress=None) -> threading.Event:

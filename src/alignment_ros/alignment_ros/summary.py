@@ -45,19 +45,22 @@ def _read(bag: Path, names: tuple[str, ...]) -> dict[str, list]:
 
 
 def estimates_from_bag(bag: Path) -> dict[str, np.ndarray]:
-    """t_ns (N,), misalignment (N, 3), sigma (N, 3) from a bag of filter outputs. The filter
-    publishes one of each topic per output, in order; a bag cut short (a killed recorder) may
-    hold one more of either: N is the outputs it holds both of."""
+    """t_ns (N,), misalignment (N, 3), sigma (N, 3) from a bag of filter outputs: each
+    misalignment with the /alignment/state of the same output, found by the stamp that message
+    carries in its first row (it has no header: its place in the bag is when it arrived, and a
+    recorder whose reader was matched while outputs already flowed can get one late). An output
+    the bag holds only one of the two messages of (a killed recorder) is left out."""
     d = _read(bag, (topics.ALIGN_MISALIGNMENT, topics.ALIGN_STATE))
-    n_out = min(len(d[topics.ALIGN_MISALIGNMENT]), len(d[topics.ALIGN_STATE]))
-    vectors = d[topics.ALIGN_MISALIGNMENT][:n_out]
-    t = np.array([to_ns(m.header.stamp) for m in vectors], dtype=np.int64)
-    mu = np.array([[m.vector.x, m.vector.y, m.vector.z] for m in vectors])
-    sig = []
-    for m in d[topics.ALIGN_STATE][:n_out]:
+    sigma_at: dict[float, np.ndarray] = {}
+    for m in d[topics.ALIGN_STATE]:
         n = m.layout.dim[1].size
-        sig.append(np.asarray(m.data[3 * n:3 * n + 3]))
-    return {'t_ns': t, 'misalignment': mu.reshape(-1, 3), 'sigma': np.array(sig).reshape(-1, 3)}
+        sigma_at[m.data[0]] = np.asarray(m.data[3 * n:3 * n + 3])
+    pairs = [(m, sigma_at[to_ns(m.header.stamp) * 1e-9]) for m in d[topics.ALIGN_MISALIGNMENT]
+             if to_ns(m.header.stamp) * 1e-9 in sigma_at]
+    t = np.array([to_ns(m.header.stamp) for m, _ in pairs], dtype=np.int64)
+    mu = np.array([[m.vector.x, m.vector.y, m.vector.z] for m, _ in pairs])
+    sig = np.array([s for _, s in pairs])
+    return {'t_ns': t, 'misalignment': mu.reshape(-1, 3), 'sigma': sig.reshape(-1, 3)}
 
 
 def state_estimate(bag: Path, at_s: float | None = None) -> dict | None:
@@ -65,14 +68,14 @@ def state_estimate(bag: Path, at_s: float | None = None) -> dict | None:
     before `at_s` (the scored instant; None: the last one), as {t_s, labels (with their SI unit),
     estimate, sigma}; None without one (or in the older 4-row layout, which has no estimate)."""
     best = None
-    for m in _read(bag, (topics.ALIGN_STATE,))[topics.ALIGN_STATE]:
+    for m in _read(bag, (topics.ALIGN_STATE,))[topics.ALIGN_STATE]:    # by stamp: no header
         rows, cols = m.layout.dim
         n = cols.size
         if rows.size < 5 or n == 0:
             continue
         t = float(m.data[0])
-        if at_s is not None and t > at_s + 5e-4:
-            break
+        if (at_s is not None and t > at_s + 5e-4) or (best is not None and t <= best[0]):
+            continue
         best = (t, cols.label.split(','), list(m.data[n:2 * n]), list(m.data[2 * n:3 * n]))
     if best is None:
         return None
