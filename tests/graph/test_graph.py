@@ -65,6 +65,7 @@ def test_summary_has_contract_keys_and_no_losses(graph_run):
     assert s['sim_time_s'] == pytest.approx(12.0)
     assert s['wall_time_s'] > 0
     assert 0 < s['startup_s'] < s['wall_time_s'] + 60    # command -> first message (the wall time starts later)
+    assert s['node_start'] == 'fork'          # forked from the launcher (alignment_ros/forked.py)
     assert s['lost_total'] == 0
     for topic, n in s['published'].items():
         assert s['topics'][topic] == n, topic

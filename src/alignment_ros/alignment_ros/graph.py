@@ -268,10 +268,14 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
         # the progress line start after them); then the recorder's ready line
         rec = start_recorder(run, out / 'bag', end_s, recorded_of(sc), end_topics_of(sc), expect_counts=expect,
                              progress_topic=topics.RECORDER_PROGRESS, wait=False)
-        fork = forked.unsafe_reason() is None
+        unsafe = forked.unsafe_reason()
+        fork = unsafe is None
+        run.node_start = 'fork' if fork else f'start_node.sh ({unsafe})'
         if fork:
             for n in (*nodes_of(sc), 'ship_motion_node'):
                 forked.entry_point(n)      # every node's imports once, before the first fork
+        else:
+            print(f'run_graph: nodes started through scripts/start_node.sh: {unsafe}', file=sys.stderr)
         for n in nodes_of(sc):
             start(run, n, params, matched=matched, fork=fork)
         start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',
@@ -338,6 +342,7 @@ def _summary(run: Run, sc: core_scenario.Scenario, wall: float, started: float) 
     s['seed'] = sc.seed
     first = run.recorder_stats().get('first_message_unix_s')
     s['startup_s'] = None if first is None else first - started
+    s['node_start'] = run.node_start
     summary.write(s, run.out)
     return s
 

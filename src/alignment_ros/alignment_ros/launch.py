@@ -82,6 +82,7 @@ class Run:
         self.failure: str | None = None
         self._fds: tuple[int, ...] = ()
         self._preexec = die_with_parent(signal.SIGTERM)
+        self.node_start = ''             # how the nodes were started: 'fork' or why not
 
     def use_domain(self, given: int | None) -> int:
         """Claim this run's ROS domain (--domain-id, else an exported ROS_DOMAIN_ID, else a free
