@@ -39,7 +39,8 @@ def graph(rtf: float) -> dict:
         s = json.loads((out / 'summary.json').read_text())
         rec = json.loads((out / 'stats' / 'recorder.json').read_text())
         span = rec.get('receive_span_s') or s['wall_time_s']
-        cpu = {f.stem: json.loads(f.read_text()).get('cpu_s') for f in sorted((out / 'stats').glob('*_node.json'))}
+        cpu = {f.stem: json.loads(f.read_text()).get('cpu_s') for f in sorted((out / 'stats').glob('*.json'))
+               if f.stem != 'published'}      # every node's and the recorder's own CPU time
         return {'rtf_setting': rtf, 'streaming_rtf': s['sim_time_s'] / span,
                 'whole_run_rtf': s['real_time_factor'], 'lost': s['lost_total'],
                 'messages': sum(s['topics'].values()), 'startup_s': s.get('startup_s'),

@@ -14,9 +14,10 @@ tenth, best of --repeat. Filter: our KalmanFilter (Joseph form) and filterpy's o
 n = 15, m = 3 workload with the engine's measurement matrix H = [0 I 0 0 -[u x]], median per
 predict + update, best of --repeat, interleaved. pyins: bench/monte_carlo.py's peer workload.
 Graph: --graph-runs runs of the default scenario through scripts/run_graph.sh at
---real-time-factor 0 (today's tree only: REV's would need its own built workspace), each with its
-whole-run RTF, start-up (command to first message recorded), messages lost and every process's
-CPU seconds per simulated minute (the nodes' and the recorder's stats).
+--real-time-factor 0 (bench/graph_rtf.py's run; today's tree only: REV's would need its own
+built workspace), each with its whole-run RTF, start-up (command to first message recorded),
+messages lost and every process's CPU seconds per simulated minute (the nodes' and the
+recorder's stats).
 Ratios are only meaningful within a run (a shared machine's load moves every absolute number);
 the Monte Carlo's CPU seconds per run (this process and its pool's workers) move less with the
 load than its wall time.
@@ -134,22 +135,6 @@ def mc_rpm(runs: int, workers: int) -> dict:
     return {'wall_s': wall, 'runs_per_min': 60.0 * runs / wall, 'cpu_s_per_run': (cpu() - c) / runs}
 
 
-def graph_run() -> dict:
-    """One run of the default scenario through the node graph at --real-time-factor 0."""
-    with tempfile.TemporaryDirectory() as d:
-        out = Path(d) / 'run'
-        env = {k: v for k, v in os.environ.items() if k != 'ROS_DOMAIN_ID'}
-        p = subprocess.run([str(ROOT / 'scripts/run_graph.sh'), '--out', str(out), '--no-plots', '--quiet',
-                            '--real-time-factor', '0'], capture_output=True, text=True, env=env)
-        if p.returncode != 0:
-            raise RuntimeError(f'graph: {p.stderr[-2000:]}')
-        s = json.loads((out / 'summary.json').read_text())
-        cpu = {f.stem: json.loads(f.read_text()).get('cpu_s') for f in sorted((out / 'stats').glob('*.json'))}
-        per_min = {n: 60.0 * c / s['sim_time_s'] for n, c in cpu.items() if isinstance(c, (int, float))}
-        return {'whole_run_rtf': s['real_time_factor'], 'startup_s': s['startup_s'], 'lost': s['lost_total'],
-                'cpu_s_per_sim_min': per_min}
-
-
 def child(part: str, a: argparse.Namespace) -> None:
     if part == 'engine':
         out = engine_us(a.seconds, a.repeat)
@@ -209,7 +194,8 @@ def main() -> None:
         kf = run('kf', a, None)
         peer = run('pyins', a, None)
         mc = {(name, w): run(f'mc{w}', a, pp) for w in (1, 2) for name, pp in trees.items()}
-        graph = [graph_run() for _ in range(a.graph_runs)]
+        from graph_rtf import graph as graph_run  # bench/graph_rtf.py: run_graph.sh at a real-time factor
+        graphs = [graph_run(0.0) for _ in range(a.graph_runs)]
     print(f'\nengine per IMU step + 100 Hz master match (vm15, deck, {a.seconds:g} s, best of {a.repeat}):')
     for name, e in eng.items():
         print(f'  {name:12s} median {e["median_us"]:7.1f} us  p95 {e["p95_us"]:7.1f} us  ({e["updates"]} updates)')
@@ -226,10 +212,10 @@ def main() -> None:
     for (name, w), r in mc.items():
         print(f'  {name:12s} workers={w}: {r["wall_s"]:7.1f} s  {r["runs_per_min"]:6.1f} runs/min  '
               f'-> 100 runs in {100 / r["runs_per_min"]:5.1f} min; {r["cpu_s_per_run"]:5.1f} CPU s per run')
-    for g in graph:
+    for g in graphs:
         print(f'graph, default scenario, --real-time-factor 0: whole-run RTF {g["whole_run_rtf"]:.2f}, first message '
               f'{g["startup_s"]:.2f} s after the command, {g["lost"]} lost; CPU s per simulated minute: '
-              + ', '.join(f'{n} {c:.1f}' for n, c in g['cpu_s_per_sim_min'].items()))
+              + ', '.join(f'{n} {60.0 * c / g["sim_time_s"]:.1f}' for n, c in g['cpu_s'].items() if c is not None))
     if a.against:
         e0 = eng[a.against]['median_us']
         print(f'today vs {a.against}: engine step {e0 / today:.2f}x faster; Monte Carlo '

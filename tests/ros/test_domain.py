@@ -9,6 +9,7 @@ from __future__ import annotations
 import fcntl
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -138,20 +139,11 @@ def test_a_released_domain_is_claimed_again_last_the_longest_released_first():
 
 
 _LINGER_PROBE = """
-import fcntl
 import gc
 import rclpy
 from rclpy.context import Context
 from alignment_ros import domain
-
-def locked(dom):
-    with open(domain.LOCK_DIR / f'{dom}.lock', 'w') as f:
-        try:
-            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            return True
-        fcntl.flock(f, fcntl.LOCK_UN)
-        return False
+from test_domain import _locked as locked
 
 dom = domain.claim()
 ctx = Context()
@@ -169,5 +161,6 @@ print(kept, locked(dom), other != dom)
 
 
 def test_a_domain_is_let_go_only_once_no_participant_of_the_process_is_left_on_it():
-    out = subprocess.run([sys.executable, '-c', _LINGER_PROBE], capture_output=True, text=True, check=True)
+    out = subprocess.run([sys.executable, '-c', _LINGER_PROBE], capture_output=True, text=True, check=True,
+                         cwd=Path(__file__).parent)            # the probe imports this module's _locked
     assert out.stdout.split() == ['True', 'False', 'True']

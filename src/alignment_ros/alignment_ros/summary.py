@@ -55,11 +55,11 @@ def estimates_from_bag(bag: Path) -> dict[str, np.ndarray]:
     for m in d[topics.ALIGN_STATE]:
         n = m.layout.dim[1].size
         sigma_at[m.data[0]] = np.asarray(m.data[3 * n:3 * n + 3])
-    pairs = [(m, sigma_at[to_ns(m.header.stamp) * 1e-9]) for m in d[topics.ALIGN_MISALIGNMENT]
-             if to_ns(m.header.stamp) * 1e-9 in sigma_at]
-    t = np.array([to_ns(m.header.stamp) for m, _ in pairs], dtype=np.int64)
-    mu = np.array([[m.vector.x, m.vector.y, m.vector.z] for m, _ in pairs])
-    sig = np.array([s for _, s in pairs])
+    stamps = [to_ns(m.header.stamp) for m in d[topics.ALIGN_MISALIGNMENT]]
+    paired = [(t_ns, m) for t_ns, m in zip(stamps, d[topics.ALIGN_MISALIGNMENT]) if t_ns * 1e-9 in sigma_at]
+    t = np.array([t_ns for t_ns, _ in paired], dtype=np.int64)
+    mu = np.array([[m.vector.x, m.vector.y, m.vector.z] for _, m in paired])
+    sig = np.array([sigma_at[t_ns * 1e-9] for t_ns, _ in paired])
     return {'t_ns': t, 'misalignment': mu.reshape(-1, 3), 'sigma': sig.reshape(-1, 3)}
 
 
