@@ -3,6 +3,7 @@ False) while the slave runs free inertial, never an exception out of a node's ca
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import pytest
@@ -55,7 +56,8 @@ def test_a_corrupted_master_sample_breaks_the_filter_down_and_the_last_estimate_
     k = 201                                   # the master sample after the output at 2.0 s
     master = list(inp.master)
     master[k] = dataclasses.replace(master[k], v_b=master[k].v_b * 1e200)
-    with pytest.warns(RuntimeWarning, match='overflow'):
+    with warnings.catch_warnings():           # numpy's overflow warning (compiled kernels give none)
+        warnings.simplefilter('ignore', RuntimeWarning)
         f = pipeline.align(sc, dataclasses.replace(inp, master=master))
     assert f.counters.numerical_failures == 1 and not f.healthy and 'not finite' in f.failure
     assert f.counters.updates == k - 1        # the first sample initialises

@@ -30,6 +30,7 @@ PACKAGES = sorted(p.parent.name for p in SRC.glob('*/package.xml'))
 PYTHON_KEYS = {
     'numpy': 'python3-numpy',
     'scipy': 'python3-scipy',
+    'numba': 'python3-numba',
     'yaml': 'python3-yaml',
     'matplotlib': 'python3-matplotlib',
     'tqdm': 'python3-tqdm',

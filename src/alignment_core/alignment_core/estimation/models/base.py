@@ -29,7 +29,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from alignment_core.geometry.rotations import dcm_to_rotvec
+from alignment_core.compiled import kernel, on_warm_up
+from alignment_core.geometry.rotations_compiled import dcm_to_rotvec_k
 from alignment_core.navigation.strapdown import NavState
 
 # state kinds, for per-block tuning (the multiple-factor STF's alpha per kind)
@@ -177,7 +178,23 @@ def relative_misalignment(c_m: np.ndarray, c_na: np.ndarray, p_rel: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
     """mu = log(C_m^T C_a) (aircraft axes) and its 1-sigma from the nav-frame covariance p_rel
     of the relative attitude error, rotated to aircraft axes."""
-    return dcm_to_rotvec(c_m.T @ c_na), np.sqrt((c_na.T @ p_rel @ c_na).diagonal())
+    return relative_misalignment_k(np.ascontiguousarray(c_m, dtype=np.float64),
+                                   np.ascontiguousarray(c_na, dtype=np.float64),
+                                   np.ascontiguousarray(p_rel, dtype=np.float64))
+
+
+@kernel
+def relative_misalignment_k(c_m, c_na, p_rel):
+    """relative_misalignment, compiled: c_m, c_na, p_rel (3, 3) C-ordered float64."""
+    c = np.dot(c_m.T, c_na)
+    mu = dcm_to_rotvec_k(c[0, 0], c[1, 1], c[2, 2], c[0, 1], c[0, 2], c[1, 0], c[1, 2], c[2, 0], c[2, 1])
+    d = np.dot(np.dot(c_na.T, p_rel), c_na)
+    return np.array([mu[0], mu[1], mu[2]]), np.sqrt(np.array([d[0, 0], d[1, 1], d[2, 2]]))
+
+
+@on_warm_up
+def _warm_up() -> None:
+    relative_misalignment(np.eye(3), np.eye(3), np.eye(3))
 
 
 class ModelWrapper(ErrorModel):

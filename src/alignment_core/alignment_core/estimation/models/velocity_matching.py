@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from alignment_core.compiled import kernel, on_warm_up
 from alignment_core.estimation.models.base import (
     DV,
     EPS,
@@ -39,17 +40,16 @@ from alignment_core.estimation.models.base import (
     Measurement,
     Propagation,
     nominal_attitude,
-    relative_misalignment,
+    relative_misalignment_k,
 )
 from alignment_core.geometry.rotations import (
     floats,
-    quat_to_dcm,
     rotate_attitude,
-    rotvec_to_dcm,
     skew_cells,
     skew_into,
     skew_values,
 )
+from alignment_core.geometry.rotations_compiled import quat_to_dcm_k, rotvec_to_dcm_k
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import ARCMIN, DEG, DPH, UG
 
@@ -58,7 +58,6 @@ LABELS = ('phi_E', 'phi_N', 'phi_U', 'dV_E', 'dV_N', 'dV_U', 'eps_x', 'eps_y', '
 MASTER_LABELS = ('phim_E', 'phim_N', 'phim_U')
 N = 12
 H = np.hstack([np.zeros((3, 3)), np.eye(3), np.zeros((3, 6))])
-_dot = np.dot
 
 
 def labels(master_states: bool) -> tuple[str, ...]:
@@ -97,7 +96,6 @@ class NoiseDensities:
     accel_bias_rw: float
 
 
-_EYE = {12: np.eye(12), 15: np.eye(15)}
 
 
 def _fh_index(n: int) -> np.ndarray:
@@ -114,36 +112,50 @@ _FH_INDEX: dict[int, np.ndarray] = {}
 
 def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray,
                h: float, n: int = N) -> np.ndarray:
-    """Phi (n, n) over an interval h, from the mean attitude, specific force and rates.
-
-    Speed: F h's 36 non-zero entries are computed in float arithmetic and written with one
-    put() (numpy slice writes of 3x3 blocks cost ~1 us each); the numbers are those of
-    `continuous(...) * h` written block by block."""
+    """Phi (n, n) over an interval h, from the mean attitude, specific force and rates: the
+    compiled _transition (its numbers are those of `continuous(...) * h` written block by block)."""
     idx = _FH_INDEX.get(n)
     if idx is None:
         idx = _FH_INDEX[n] = _fh_index(n)
-    c0, c1, c2, c3, c4, c5, c6, c7, c8 = c_nb.ravel().tolist()
-    fx, fy, fz = f_n.tolist()
-    ie0, ie1, ie2 = w_ie.tolist()
-    en0, en1, en2 = w_en.tolist()
+    return _transition(_f64(c_nb), _f64(f_n), _f64(w_ie), _f64(w_en), float(h), idx, n)
+
+
+def _f64(a) -> np.ndarray:
+    return a if type(a) is np.ndarray and a.dtype == np.float64 else np.asarray(a, dtype=np.float64)
+
+
+@kernel
+def _transition(c_nb, f_n, w_ie, w_en, h, idx, n):
+    """I + F h + (F h)^2 / 2 with F h's 36 non-zero entries (in _fh_index's order) in float
+    arithmetic; c_nb (3, 3), f_n, w_ie, w_en (3,), idx (36,) flat cell indices."""
+    c = c_nb.reshape(9) if c_nb.flags.c_contiguous else np.ascontiguousarray(c_nb).reshape(9)
     mh = -h
-    # skew_values(x, y, z) = (-z, y, z, -x, -y, x) written out (the calls and list joins cost more
-    # than the arithmetic)
-    ax, ay, az = mh * (ie0 + en0), mh * (ie1 + en1), mh * (ie2 + en2)
-    bx, by, bz = h * fx, h * fy, h * fz
-    dx, dy, dz = mh * (2.0 * ie0 + en0), mh * (2.0 * ie1 + en1), mh * (2.0 * ie2 + en2)
+    ax, ay, az = mh * (w_ie[0] + w_en[0]), mh * (w_ie[1] + w_en[1]), mh * (w_ie[2] + w_en[2])
+    bx, by, bz = h * f_n[0], h * f_n[1], h * f_n[2]
+    dx = mh * (2.0 * w_ie[0] + w_en[0])
+    dy = mh * (2.0 * w_ie[1] + w_en[1])
+    dz = mh * (2.0 * w_ie[2] + w_en[2])
+    # skew_values(x, y, z) = (-z, y, z, -x, -y, x) per skew block
     vals = (-az, ay, az, -ax, -ay, ax,
-            mh * c0, mh * c1, mh * c2, mh * c3, mh * c4, mh * c5, mh * c6, mh * c7, mh * c8,
+            mh * c[0], mh * c[1], mh * c[2], mh * c[3], mh * c[4], mh * c[5], mh * c[6], mh * c[7], mh * c[8],
             -bz, by, bz, -bx, -by, bx,
             -dz, dy, dz, -dx, -dy, dx,
-            h * c0, h * c1, h * c2, h * c3, h * c4, h * c5, h * c6, h * c7, h * c8)
+            h * c[0], h * c[1], h * c[2], h * c[3], h * c[4], h * c[5], h * c[6], h * c[7], h * c[8])
     fh = np.zeros((n, n))
-    fh.put(idx, vals)
-    half = _dot(fh, fh)
+    flat = fh.reshape(n * n)
+    for i in range(36):
+        flat[idx[i]] = vals[i]
+    half = np.dot(fh, fh)
     half *= 0.5
-    phi = _EYE[n] + fh
+    phi = np.eye(n) + fh
     phi += half
     return phi
+
+
+@on_warm_up
+def _warm_up() -> None:
+    z3 = np.zeros(3)
+    transition(np.eye(3), z3, z3, z3, 0.01, N)
 
 
 def process_noise(q: NoiseDensities, h: float, n: int = N) -> np.ndarray:
@@ -235,11 +247,27 @@ class VelocityMatching(ErrorModel):
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
         """log((C_m c_nom)^T C_a) with, for vm15, C_m corrected by phi_m (C_m = (I + [phi_m x]) C_m,est)
         and the sigma of phi - phi_m."""
-        c_na = quat_to_dcm(nav.q_nb)
-        c_m = nominal_attitude(m)
-        if self._n == 15:
-            c_m = rotvec_to_dcm(x[12:15]) @ c_m
-            p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
-        else:
-            p_rel = p[0:3, 0:3]
-        return relative_misalignment(c_m, c_na, p_rel)
+        return _misalignment(_f64(nav.q_nb), np.ascontiguousarray(nominal_attitude(m), dtype=np.float64),
+                             _f64(x), p, self._n == 15)
+
+
+@kernel
+def _misalignment(q_nb, c_m, x, p, master_states):
+    """VelocityMatching.misalignment compiled: q_nb (4,), C_m c_nom (3, 3), x (n,) float64,
+    P (n, n) in the filter's dtype (p_rel is formed in it); master_states: x[12:15] is phi_m."""
+    cnb = quat_to_dcm_k((q_nb[0], q_nb[1], q_nb[2], q_nb[3]))
+    c_na = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            c_na[i, j] = cnb[3 * i + j]
+    if master_states:
+        cm = rotvec_to_dcm_k(x[12], x[13], x[14])
+        r = np.empty((3, 3))
+        for i in range(3):
+            for j in range(3):
+                r[i, j] = cm[3 * i + j]
+        c_m = np.dot(r, c_m)
+        p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
+    else:
+        p_rel = np.ascontiguousarray(p[0:3, 0:3])
+    return relative_misalignment_k(c_m, c_na, p_rel.astype(np.float64))

@@ -1,0 +1,89 @@
+"""The compiled Kalman predict and update give their interpreted form's numbers bit for bit
+(the interpreted form is numpy's code: the same operations through the same BLAS and LAPACK),
+in float64, float32 and the mixed float32 / float64 the engine's feedback makes."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core.estimation.filters import kalman_kernels as kk
+from alignment_core.estimation.filters.kalman import KalmanFilter
+
+N, M = 15, 3
+
+
+def _problem(rng, dtype_x=np.float64, dtype_p=np.float64, selecting=True):
+    a = rng.standard_normal((N, N))
+    p = (a @ a.T + np.eye(N) * rng.uniform(0.01, 10.0)).astype(dtype_p)
+    x = rng.standard_normal(N).astype(dtype_x)
+    h = np.zeros((M, N))
+    h[:, 3:6] = np.eye(M)
+    if not selecting:
+        h[:, 12:15] = rng.standard_normal((M, M))
+    dt = np.float32 if dtype_p == np.float32 else np.float64
+    z = rng.standard_normal(M).astype(dt)
+    r = np.diag(rng.uniform(1e-3, 1e-1, M)).astype(dt)
+    sel = np.arange(3, 6, dtype=np.int64) if selecting else kk.NO_SELECTION
+    return x, p, z, h.astype(dt), r, sel, np.eye(N, dtype=dt)
+
+
+def _same(a, b) -> bool:
+    return type(a) is type(b) and (a == b or (a != a and b != b)) if not isinstance(a, np.ndarray) else \
+        a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+@pytest.mark.parametrize('selecting', [True, False])
+@pytest.mark.parametrize('dtypes', [(np.float64, np.float64), (np.float32, np.float32), (np.float64, np.float32)])
+def test_update_compiled_equals_interpreted(selecting, dtypes):
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        args = _problem(rng, *dtypes, selecting=selecting)
+        x, p, z, h, r, sel, eye = args
+        for gate in (np.inf, 2.0):
+            got = kk.update(x, p, z, h, r, sel, gate, eye)
+            want = kk.update.py_func(x, p, z, h, r, sel, gate, eye)
+            assert all(_same(a, b) for a, b in zip(got, want))
+
+
+@pytest.mark.parametrize('dtypes', [(np.float64, np.float64), (np.float32, np.float32), (np.float64, np.float32)])
+def test_predict_compiled_equals_interpreted(dtypes):
+    rng = np.random.default_rng(8)
+    dt = dtypes[1]
+    for _ in range(100):
+        x, p, *_ = _problem(rng, *dtypes)
+        phi = (np.eye(N) + 0.01 * rng.standard_normal((N, N))).astype(dt)
+        qd = np.diag(rng.uniform(1e-8, 1e-6, N)).astype(dt)
+        got, want = kk.predict(x, p, phi, qd), kk.predict.py_func(x, p, phi, qd)
+        assert all(_same(a, b) for a, b in zip(got, want))
+
+
+def test_the_filter_equals_the_textbook_update_it_replaced():
+    """The Joseph form written out in numpy (the filter's code before the kernels): the same
+    bits, selecting and full H."""
+    rng = np.random.default_rng(9)
+    for selecting in (True, False):
+        x, p, z, h, r, _, eye = _problem(rng, selecting=selecting)
+        kf = KalmanFilter(x, p)
+        kf.update(z, h, r)
+        s = h @ p @ h.T + r
+        s_inv = np.linalg.inv(s)
+        k = p @ h.T @ s_inv
+        ikh = eye - k @ h
+        a = ikh @ p @ ikh.T + k @ r @ k.T
+        want = a + a.T
+        want *= 0.5
+        assert np.allclose(kf.x, x + k @ (z - h @ x), rtol=1e-13, atol=1e-15)
+        assert np.allclose(kf.P, want, rtol=1e-13, atol=0.0)
+
+
+def test_a_non_finite_s_is_not_accepted_and_a_singular_one_raises():
+    rng = np.random.default_rng(10)
+    x, p, z, h, r, sel, eye = _problem(rng, selecting=False)
+    bad = r.copy()
+    bad[0, 0] = np.nan
+    y, s, nis, accepted, x1, p1 = kk.update(x, p, z, h, bad, sel, np.inf, eye)
+    assert np.isnan(nis) and not accepted and x1 is x and p1 is p
+    kf = KalmanFilter(x, p)
+    with pytest.raises(np.linalg.LinAlgError):
+        kf.update(z, np.zeros_like(h), np.zeros_like(r))      # S = 0: singular
+    assert kf.n_updates == 0 and np.array_equal(kf.x, x) and np.array_equal(kf.P, p)

@@ -1,0 +1,62 @@
+"""The velocity-matching model's compiled kernels (transition, misalignment) and the shared
+relative_misalignment equal their interpreted forms bit for bit, and the transition is still
+I + F h + (F h)^2 / 2 of the continuous model."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core.estimation.models import base
+from alignment_core.estimation.models import velocity_matching as vm
+from alignment_core.geometry.rotations import rotvec_to_dcm
+
+
+def _dcm(rng, scale=0.5):
+    return rotvec_to_dcm(rng.standard_normal(3) * scale)
+
+
+def _same(a, b):
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+@pytest.mark.parametrize('n', [12, 15])
+def test_transition_compiled_equals_interpreted_and_the_series(n):
+    rng = np.random.default_rng(21)
+    for _ in range(100):
+        c, f = _dcm(rng), rng.standard_normal(3) * 10
+        w_ie, w_en = rng.standard_normal(3) * 1e-4, rng.standard_normal(3) * 1e-5
+        h = float(rng.choice([0.0025, 0.01]))
+        idx = vm._fh_index(n)
+        got = vm.transition(c, f, w_ie, w_en, h, n)
+        assert _same(got, vm._transition.py_func(c, f, w_ie, w_en, h, idx, n))
+        fh = vm.continuous(c, f, w_ie, w_en, n) * h
+        assert np.allclose(got, np.eye(n) + fh + fh @ fh / 2, rtol=0.0, atol=1e-15)
+
+
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+@pytest.mark.parametrize('master_states', [True, False])
+def test_misalignment_compiled_equals_interpreted(dtype, master_states):
+    rng = np.random.default_rng(22)
+    for _ in range(100):
+        q = rng.standard_normal(4)
+        q /= np.sqrt(q @ q)
+        c_m, x = _dcm(rng), rng.standard_normal(15) * 1e-3
+        a = rng.standard_normal((15, 15))
+        p = (a @ a.T * 1e-6).astype(dtype)
+        got = vm._misalignment(q, c_m, x, p, master_states)
+        want = vm._misalignment.py_func(q, c_m, x, p, master_states)
+        assert all(_same(g, w) for g, w in zip(got, want))
+
+
+def test_relative_misalignment_compiled_equals_interpreted_and_is_the_log():
+    rng = np.random.default_rng(23)
+    for _ in range(100):
+        phi = rng.standard_normal(3) * 0.01
+        c_m = _dcm(rng)
+        c_na = c_m @ rotvec_to_dcm(phi)                  # C_a = C_m exp([phi x]): mu = phi
+        p = np.diag(rng.uniform(1e-8, 1e-6, 3))
+        mu, sigma = base.relative_misalignment(c_m, c_na, p)
+        want = base.relative_misalignment_k.py_func(c_m, c_na, p)
+        assert _same(mu, want[0]) and _same(sigma, want[1])
+        assert np.allclose(mu, phi, rtol=0.0, atol=1e-15)
+        assert np.allclose(sigma, np.sqrt(np.diag(c_na.T @ p @ c_na)), rtol=1e-14, atol=0.0)

@@ -1,0 +1,106 @@
+"""alignment_core.compiled: where the kernels' machine code is cached, and how they compile."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from alignment_core import compiled
+
+
+def _package(tmp_path: Path) -> Path:
+    pkg = tmp_path / 'pkg'
+    (pkg / 'sub').mkdir(parents=True)
+    (pkg / 'a.py').write_text('x = 1\n')
+    (pkg / 'sub' / 'b.py').write_text('y = 2\n')
+    return pkg
+
+
+def test_the_digest_changes_with_any_source_file_and_only_with_them(tmp_path, monkeypatch):
+    pkg = _package(tmp_path)
+    monkeypatch.setattr(compiled, 'PACKAGE', pkg)
+    d0 = compiled._source_digest()
+    (pkg / 'notes.txt').write_text('not code')
+    assert compiled._source_digest() == d0
+    (pkg / 'sub' / 'b.py').write_text('y = 3\n')            # a callee's file, not the kernel's
+    d1 = compiled._source_digest()
+    assert d1 != d0
+    (pkg / 'sub' / 'b.py').write_text('y = 2\n')
+    assert compiled._source_digest() == d0
+
+
+def test_the_cache_directory_is_named_by_the_digest_and_replaces_older_ones(tmp_path, monkeypatch):
+    pkg = _package(tmp_path)
+    monkeypatch.setattr(compiled, 'PACKAGE', pkg)
+    monkeypatch.delenv('NUMBA_CACHE_DIR', raising=False)
+    first = compiled.cache_dir()
+    assert first.is_dir() and first.parent == pkg / '__pycache__' and first.name.startswith('kernels-')
+    (first / 'k.nbi').write_bytes(b'old')
+    (pkg / 'a.py').write_text('x = 2\n')
+    second = compiled.cache_dir()
+    assert second != first and second.is_dir() and not first.exists()
+    assert compiled.cache_dir() == second                  # unchanged sources: the same place
+
+
+def test_a_user_cache_directory_wins(tmp_path, monkeypatch):
+    monkeypatch.setenv('NUMBA_CACHE_DIR', str(tmp_path / 'mine'))
+    assert compiled.cache_dir() == tmp_path / 'mine'
+
+
+def test_kernels_are_compiled_without_fast_math_and_with_pythons_error_model():
+    """Fast math would let LLVM reorder and fuse float operations (the numbers would move);
+    numpy's error model would turn a division by zero into inf instead of the exception the
+    interpreted code raises."""
+    def half(a, b):
+        return a / b
+    k = compiled.kernel(half)
+    assert not k.targetoptions.get('fastmath', False)
+    assert k.targetoptions.get('error_model', 'python') == 'python'
+    assert k(1.0, 4.0) == half(1.0, 4.0) == 0.25
+    for f in (k, half):
+        try:
+            f(1.0, 0.0)
+        except ZeroDivisionError:
+            continue
+        raise AssertionError('no ZeroDivisionError')
+
+
+def test_warm_up_compiles_every_registered_kernel_in_a_fresh_process():
+    """After warm_up() no registered kernel compiles on its first call (the launcher forks its
+    nodes after it)."""
+    code = ('import alignment_core.estimation.engine\n'
+            'from alignment_core import compiled\n'
+            'compiled.warm_up()\n'
+            'from alignment_core.estimation.filters import kalman_kernels as k\n'
+            'from alignment_core.navigation import strapdown as s\n'
+            'from alignment_core.estimation.models import velocity_matching as v\n'
+            'ks = (k.predict, k.update, s.step, v._transition)\n'
+            'print(len(compiled._WARM_UPS), *(len(f.signatures) for f in ks))\n')
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True,
+                         env=dict(os.environ)).stdout.split()
+    n_warm, *signatures = (int(v) for v in out)
+    assert n_warm >= 4 and all(n >= 1 for n in signatures)
+
+
+def test_compiled_and_interpreted_agree_on_a_kernel_with_blas():
+    def gram(a):
+        return np.dot(a.T, a) + np.dot(a, a.T)
+    k = compiled.kernel(gram)
+    a = np.random.default_rng(0).standard_normal((7, 7))
+    assert np.array_equal(k(a), gram(a))
+
+
+def test_no_kernel_of_the_engine_uses_a_numpy_reduction():
+    """numpy sums pairwise and numba in order: a reduction in a kernel would round differently
+    from its interpreted form (compiled.py)."""
+    import inspect
+
+    import alignment_core.estimation.engine  # noqa: F401  (imports every kernel of the engine)
+    assert len(compiled.KERNELS) >= 10
+    for k in compiled.KERNELS:
+        src = inspect.getsource(k.py_func)
+        for word in ('.sum(', 'np.sum', '.mean(', 'np.mean', 'norm(', '.prod(', 'np.add.reduce'):
+            assert word not in src, f'{k.py_func.__qualname__} uses {word}'
