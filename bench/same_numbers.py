@@ -1,5 +1,6 @@
 """Check that a change leaves the batch pipeline's numbers as they were: run a few seeds of the
-`deck`, `catapult` and `catapult` (schuler model, master delay state) scenarios, save
+`deck`, `catapult` and `catapult` (schuler model, master delay state) scenarios, and the other
+filters of the bank (float32 Kalman and UD, fading, strong tracking, cubature, vm12), save
 every estimate's arrays, or compare them with a saved file.
 
     python bench/same_numbers.py save REF.npz [--seconds S]
@@ -18,14 +19,19 @@ import numpy as np
 from alignment_core import pipeline
 from alignment_core.config import scenario
 
-CASES = [('deck_paper', 1), ('deck_paper', 7), ('catapult_paper', 1), ('catapult_paper', 3), ('catapult', 1),
-         ('deck', 1)]
+CASES: list[tuple[str, int, dict]] = [
+    ('deck_paper', 1, {}), ('deck_paper', 7, {}), ('catapult_paper', 1, {}), ('catapult_paper', 3, {}),
+    ('catapult', 1, {}), ('deck', 1, {}),
+    ('deck_paper', 3, {'filter.float32': True}), ('catapult_paper', 3, {'filter.float32': True}),
+    ('deck_paper', 3, {'filter.algorithm': 'ud', 'filter.float32': True}),
+    ('deck_paper', 3, {'filter.algorithm': 'fading'}), ('catapult_paper', 3, {'filter.algorithm': 'stf'}),
+    ('catapult_paper', 3, {'filter.algorithm': 'ckf'}), ('catapult_paper', 3, {'filter.model': 'vm12'})]
 SKIP = {'report', 'flags', 'fading'}
 
 
-def arrays(name: str, seed: int, seconds: float) -> dict[str, np.ndarray]:
+def arrays(name: str, seed: int, overrides: dict, seconds: float) -> dict[str, np.ndarray]:
     """Every numeric field of every estimate of one run, stacked by field."""
-    sc = scenario.load(name, {'duration_s': seconds} if seconds else None, seed=seed)
+    sc = scenario.load(name, {**overrides, **({'duration_s': seconds} if seconds else {})}, seed=seed)
     res = pipeline.run(sc, keep_truth=False)
     out: dict[str, list] = {}
     for e in res.estimates:
@@ -45,7 +51,8 @@ def main() -> None:
     ap.add_argument('path')
     ap.add_argument('--seconds', type=float, default=None, help='default: each scenario\'s own duration')
     a = ap.parse_args()
-    runs = {f'{n}_{s}': arrays(n, s, a.seconds) for n, s in CASES}
+    runs = {'_'.join([n, str(s), *(f'{k.split(".")[-1]}={v}' for k, v in o.items())]): arrays(n, s, o, a.seconds)
+            for n, s, o in CASES}
     if a.mode == 'save':
         np.savez(a.path, **{f'{c}/{k}': v for c, d in runs.items() for k, v in d.items()})
         print(f'saved {len(runs)} runs to {a.path}')
