@@ -57,6 +57,20 @@ def test_predict_compiled_equals_interpreted(dtypes):
         assert all(_same(a, b) for a, b in zip(got, want))
 
 
+@pytest.mark.parametrize('dtypes', [(np.float64, np.float64), (np.float32, np.float32), (np.float64, np.float32)])
+def test_joseph_compiled_equals_interpreted(dtypes):
+    """The subclasses' update (fading, nonlinear) after they changed the prior."""
+    rng = np.random.default_rng(6)
+    for _ in range(100):
+        x, p, z, h, r, _, eye = _problem(rng, *dtypes, selecting=False)
+        ph = kk.dot(p, h.T)
+        s_inv = kk.inverse(kk.dot(h, ph) + r)
+        y = z - kk.dot(h, x)
+        got = kk.joseph(x, p, ph, s_inv, y, h, r, eye)
+        want = kk.joseph.py_func(x, p, ph, s_inv, y, h, r, eye)
+        assert all(_same(a, b) for a, b in zip(got, want))
+
+
 def test_the_filter_equals_the_textbook_update_it_replaced():
     """The Joseph form written out in numpy (the filter's code before the kernels): the same
     bits, selecting and full H."""

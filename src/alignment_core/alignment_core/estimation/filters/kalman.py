@@ -15,14 +15,6 @@ _count_nonzero = np.count_nonzero
 _INF = float('inf')
 
 
-def _symmetrised(p: np.ndarray) -> np.ndarray:
-    """0.5 (p + p^T), the same numbers as the expression with one temporary fewer (an in-place
-    p += p.T is slower: numpy buffers the overlapping transpose)."""
-    s = p + p.T
-    s *= 0.5
-    return s
-
-
 class KalmanFilter(Counters):
     """x (n,), P (n, n). predict(Phi, Qd); update(z, H, R) in Joseph form (P stays SPD).
 
@@ -108,7 +100,4 @@ class KalmanFilter(Counters):
     def _joseph(self, y, ph, s_inv, h, r) -> None:
         """x += K y, P <- (I - K H) P (I - K H)^T + K R K^T, symmetrised (the same operations as
         update(), for the subclasses that change the prior before updating)."""
-        k = _dot(ph, s_inv)
-        self.x = self.x + _dot(k, y)
-        ikh = self._eye - _dot(k, h)
-        self.P = _symmetrised(_dot(_dot(ikh, self.P), ikh.T) + _dot(_dot(k, r), k.T))
+        self.x, self.P = kernels.joseph(self.x, self.P, ph, s_inv, y, h, r, self._eye)

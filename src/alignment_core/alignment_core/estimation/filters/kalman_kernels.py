@@ -84,13 +84,21 @@ def update(x, p, z, h, r, sel, gate, eye):
     nis = float(dot(dot(y, s_inv), y))
     if not nis < np.inf or nis > gate:
         return y, s, nis, False, x, p
+    x_new, p_new = joseph(x, p, ph, s_inv, y, h, r, eye)
+    return y, s, nis, True, x_new, p_new
+
+
+@kernel
+def joseph(x, p, ph, s_inv, y, h, r, eye):
+    """(x + K y, sym((I - K H) P (I - K H)^T + K R K^T)) with K = P H^T S^-1; ph = P H^T,
+    sym(A) = (A + A^T) / 2."""
     k = dot(ph, s_inv)
     x_new = x + dot(k, y)
     ikh = eye - dot(k, h)
     a = dot(dot(ikh, p), ikh.T) + dot(dot(k, r), k.T)
-    p_new = a + a.T                          # 0.5 (A + A^T), as KalmanFilter symmetrised
+    p_new = a + a.T
     p_new *= 0.5
-    return y, s, nis, True, x_new, p_new
+    return x_new, p_new
 
 
 NO_SELECTION = np.zeros(0, np.int64)
@@ -106,3 +114,4 @@ def _warm_up() -> None:
     predict(x, p, np.eye(n), np.eye(n))
     update(x, p, np.zeros(m), h, np.eye(m), np.arange(3, 6, dtype=np.int64), np.inf, np.eye(n))
     update(x, p, np.zeros(m), h, np.eye(m), NO_SELECTION, np.inf, np.eye(n))
+    joseph(x, p, np.zeros((n, m)), np.eye(m), np.zeros(m), h, np.eye(m), np.eye(n))
