@@ -15,6 +15,14 @@ _count_nonzero = np.count_nonzero
 _INF = float('inf')
 
 
+def _ready(a, dtype) -> np.ndarray:
+    """a in dtype, in one block of memory (C or Fortran order): a kernel's BLAS call would copy
+    any other layout itself, with a performance warning."""
+    a = as_dtype(a, dtype)
+    flags = a.flags
+    return a if flags.c_contiguous or flags.f_contiguous else np.ascontiguousarray(a)
+
+
 class KalmanFilter(Counters):
     """x (n,), P (n, n). predict(Phi, Qd); update(z, H, R) in Joseph form (P stays SPD).
 
@@ -47,7 +55,7 @@ class KalmanFilter(Counters):
         """x <- Phi x, P <- Phi P Phi^T + Qd (symmetric by construction up to round-off, which
         the next update's symmetrisation removes)."""
         dt = self.dtype
-        self.x, self.P = kernels.predict(self.x, self.P, as_dtype(phi, dt), as_dtype(qd, dt))
+        self.x, self.P = kernels.predict(self.x, self.P, _ready(phi, dt), _ready(qd, dt))
         self.n_predicts += 1
 
     def _selection(self, h: np.ndarray) -> np.ndarray | None:
@@ -79,7 +87,7 @@ class KalmanFilter(Counters):
     def update(self, z: np.ndarray, h: np.ndarray, r: np.ndarray,
                gate_chi2: float | None = None) -> UpdateResult:
         dt = self.dtype
-        z, h, r = as_dtype(z, dt), as_dtype(h, dt), as_dtype(r, dt)
+        z, h, r = _ready(z, dt), _ready(h, dt), _ready(r, dt)
         sel = self._selection(h)
         try:
             y, s, nis, accepted, x, p = kernels.update(
@@ -100,4 +108,5 @@ class KalmanFilter(Counters):
     def _joseph(self, y, ph, s_inv, h, r) -> None:
         """x += K y, P <- (I - K H) P (I - K H)^T + K R K^T, symmetrised (the same operations as
         update(), for the subclasses that change the prior before updating)."""
-        self.x, self.P = kernels.joseph(self.x, self.P, ph, s_inv, y, h, r, self._eye)
+        dt = self.dtype
+        self.x, self.P = kernels.joseph(self.x, self.P, ph, s_inv, y, _ready(h, dt), _ready(r, dt), self._eye)
