@@ -14,8 +14,8 @@ The machine code is cached on disk: the first process compiles (about 20 s for a
 the next ones load it. numba checks only a kernel's own source file for changes, not the files
 of the kernels it calls, so the cache lives in a directory named after a digest of this
 package's sources: any change to them compiles afresh. `warm_up()` compiles (or loads) every
-kernel in one go: the graph's launcher calls it before it forks its nodes, so no node compiles
-on its first message."""
+kernel in one go: the filter node calls it once its subscriptions exist (while DDS matches
+them), so it does not compile on its first message."""
 from __future__ import annotations
 
 import hashlib

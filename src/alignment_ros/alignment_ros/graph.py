@@ -31,7 +31,6 @@ from pathlib import Path
 
 import yaml
 
-from alignment_core import compiled
 from alignment_core.config import scenario as core_scenario
 from alignment_core.validation import ConfigError
 
@@ -275,7 +274,6 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
         if fork:
             for n in (*nodes_of(sc), 'ship_motion_node'):
                 forked.entry_point(n)      # every node's imports once, before the first fork
-            compiled.warm_up()             # and every kernel compiled (or loaded from its cache)
         else:
             print(f'run_graph: nodes started through scripts/start_node.sh: {unsafe}', file=sys.stderr)
         for n in nodes_of(sc):
