@@ -10,6 +10,11 @@ A kernel uses no numpy reduction (sum, mean, norm, ...): numpy sums pairwise, nu
 and the two round differently; a sum is written as the loop the interpreted code also runs.
 The interpreted form stays reachable as `f.py_func` (and everywhere under NUMBA_DISABLE_JIT=1).
 
+numba itself is imported on the first call of any kernel, not with the package: a process that
+never runs one (the graph's launcher and the nodes it forks but the filter's) does not pay its
+import (~0.3 s of start-up). Then every `Kernel` becomes a numba dispatcher, and the module
+globals that named one are rebound to it, so a call costs what a dispatcher's costs.
+
 The machine code is cached on disk: the first process compiles (about 20 s for all kernels),
 the next ones load it. numba checks only a kernel's own source file for changes, not the files
 of the kernels it calls, so the cache lives in a directory named after a digest of this
@@ -21,11 +26,10 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
-
-import numba
+from typing import Any, TypeVar, cast
 
 F = TypeVar('F', bound=Callable[..., Any])
 
@@ -65,19 +69,52 @@ def cache_dir() -> Path:
     raise OSError('no writable directory for the compiled kernels: set NUMBA_CACHE_DIR')
 
 
-numba.config.CACHE_DIR = str(cache_dir())   # type: ignore[attr-defined]  # read when a kernel is made
+class Kernel:
+    """A kernel before numba is imported: calling it (or reading a dispatcher attribute such as
+    `signatures`) makes every kernel's dispatcher (`activate`)."""
 
+    def __init__(self, fun: Callable[..., Any]) -> None:
+        self.py_func = fun
+        self.dispatcher: Any = None
+
+    def __call__(self, *args: Any) -> Any:
+        if self.dispatcher is None:
+            activate()
+        return self.dispatcher(*args)
+
+    def __getattr__(self, name: str) -> Any:
+        if name == 'dispatcher':
+            raise AttributeError(name)
+        if self.dispatcher is None:
+            activate()
+        return getattr(self.dispatcher, name)
+
+
+KERNELS: list[Kernel] = []
+"""Every kernel made so far."""
+_ON_NUMBA: list[Callable[[], None]] = []
 _WARM_UPS: list[Callable[[], None]] = []
-KERNELS: list[Any] = []
-"""Every kernel made so far (numba Dispatchers; the interpreted function is `.py_func`)."""
+_active = False
 
 
 def kernel(fun: F) -> F:
-    """fun compiled in nopython mode (Python's error model: a float division by zero raises
-    ZeroDivisionError as it does interpreted), cached on disk."""
-    k = numba.njit(cache=True, nogil=True)(fun)
+    """fun compiled in nopython mode on its first call (Python's error model: a float division
+    by zero raises ZeroDivisionError as it does interpreted), cached on disk."""
+    k = Kernel(fun)
     KERNELS.append(k)
-    return k   # type: ignore[return-value]  # a Dispatcher calls as fun
+    if _active:
+        _make_dispatcher(k)
+        return cast(F, k.dispatcher)
+    return cast(F, k)
+
+
+def on_numba(call: Callable[[], None]) -> Callable[[], None]:
+    """Register `call` to run once numba is imported, before any kernel compiles (a module's
+    numba extensions: the overloads its kernels call)."""
+    _ON_NUMBA.append(call)
+    if _active:
+        call()
+    return call
 
 
 def on_warm_up(call: Callable[[], None]) -> Callable[[], None]:
@@ -90,3 +127,31 @@ def warm_up() -> None:
     """Compile or load every registered kernel now (each module registers on import)."""
     for call in _WARM_UPS:
         call()
+
+
+def _make_dispatcher(k: Kernel) -> None:
+    import numba
+    k.dispatcher = numba.njit(cache=True, nogil=True)(k.py_func)
+
+
+def activate() -> None:
+    """Import numba, make every kernel's dispatcher and rebind the module globals that name a
+    Kernel to its dispatcher (a kernel calling another must find a dispatcher)."""
+    global _active
+    if _active:
+        return
+    import numba
+    numba.config.CACHE_DIR = str(cache_dir())   # type: ignore[attr-defined]  # read when a dispatcher is made
+    _active = True
+    for call in _ON_NUMBA:
+        call()
+    for k in KERNELS:
+        if k.dispatcher is None:
+            _make_dispatcher(k)
+    for module in list(sys.modules.values()):
+        names = getattr(module, '__dict__', None)
+        if not isinstance(names, dict):
+            continue
+        for name, value in list(names.items()):
+            if type(value) is Kernel:
+                names[name] = value.dispatcher

@@ -11,9 +11,8 @@ Every array is float64, or every one float32."""
 from __future__ import annotations
 
 import numpy as np
-from numba.extending import overload
 
-from alignment_core.compiled import kernel, on_warm_up
+from alignment_core.compiled import kernel, on_numba, on_warm_up
 from alignment_core.estimation.filters.base import inv
 
 
@@ -23,8 +22,8 @@ def dot(a, b):
     return np.dot(a, b)
 
 
-@overload(dot)
 def _dot_typed(a, b):
+    """dot's compiled form for the operand types a, b (numba types)."""
     if a.dtype == b.dtype:
         return lambda a, b: np.dot(a, b)
     return lambda a, b: np.dot(a.astype(np.float64), b.astype(np.float64))
@@ -35,14 +34,21 @@ def inverse(s):
     return inv(s)
 
 
-@overload(inverse)
-def _inverse_compiled(s):
+def _inverse_typed(s):
+    """inverse's compiled form."""
     def solve_identity(s):
         eye_m = np.zeros_like(s)
         for j in range(s.shape[0]):
             eye_m[j, j] = 1.0
         return np.ascontiguousarray(np.linalg.solve(s, eye_m))   # base.inv returns C order
     return solve_identity
+
+
+@on_numba
+def _overloads() -> None:
+    from numba.extending import overload
+    overload(dot)(_dot_typed)
+    overload(inverse)(_inverse_typed)
 
 
 @kernel
