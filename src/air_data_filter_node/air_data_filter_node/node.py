@@ -23,7 +23,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import FluidPressure, Imu
 from std_msgs.msg import Float64MultiArray
 
-from alignment_core import compiled, pipeline
+from alignment_core import pipeline
 from alignment_core.air_data_run import IMU_BLOCK_S, make_estimator
 from alignment_core.estimation.air_data.outputs import AirDataEstimate
 from alignment_core.estimation.air_data.paper_form import PaperAirDataFilter
@@ -70,7 +70,6 @@ class AirDataFilterNode(node_util.CountingNode):
         self.create_subscription(Odometry, self.ins_topic, self.on_ins, qos.STREAM)
         if self.paper:
             self.create_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu, qos.STREAM)
-        compiled.warm_up()    # the kernels loaded (or compiled) now, while DDS matches the subscriptions
 
     # ----- inputs -----
     def on_port(self, k: int, m: FluidPressure) -> None:

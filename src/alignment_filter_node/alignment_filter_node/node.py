@@ -22,7 +22,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
-from alignment_core import compiled, pipeline
+from alignment_core import pipeline
 from alignment_core.estimation.engine import TransferAlignment
 from alignment_core.estimation.health import ERROR, WARN
 from alignment_core.estimation.outputs import Diagnostics, Estimate, Report
@@ -125,7 +125,6 @@ class AlignmentFilterNode(node_util.CountingNode):
         self.n_out = 0
         self.reported: tuple[int, tuple[str, ...]] = (0, ())    # (level, flags) last published in /diagnostics
         self.last: Estimate | None = None
-        compiled.warm_up()    # the kernels loaded (or compiled) now, while DDS matches the subscriptions
 
     def on_imu(self, m: Imu) -> None:
         self._accept(topics.AIRCRAFT_IMU, self.inputs.imu(m), m)

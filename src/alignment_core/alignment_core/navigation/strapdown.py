@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from alignment_core.compiled import kernel, on_warm_up
+from alignment_core.compiled import kernel
 from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import quat_to_dcm
 from alignment_core.geometry.rotations_compiled import normalized_k, quat_mul_k, quat_to_dcm_k, rotvec_to_quat_k
@@ -131,9 +131,3 @@ def step(dtheta, dv, prev_dtheta, prev_dv, q_nb, v_n, lat0, lon0, h0, h):
     return (c_start, np.array([0.0, ien, ieu]), np.array([ene, enn, enu]), np.array([vx, vy, vz]),
             np.array([qn[0], qn[1], qn[2], qn[3]]), np.array([dnx / h, dny / h, dnz / h]),
             lat, lon, h0 + h * vmz)
-
-
-@on_warm_up
-def _warm_up() -> None:
-    z3 = np.zeros(3)
-    step(z3, z3, z3, z3, np.array([0.0, 0.0, 0.0, 1.0]), z3, 0.6, 0.1, 10.0, 0.01)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from alignment_core.compiled import kernel, on_numba, on_warm_up
+from alignment_core.compiled import kernel, on_numba
 from alignment_core.estimation.filters.base import inv
 
 
@@ -108,16 +108,3 @@ def joseph(x, p, ph, s_inv, y, h, r, eye):
 
 
 NO_SELECTION = np.zeros(0, np.int64)
-
-
-@on_warm_up
-def _warm_up() -> None:
-    """The engine's types: float64, C-ordered arrays, a selecting and a full H."""
-    n, m = 15, 3
-    x, p = np.zeros(n), np.eye(n)
-    h = np.zeros((m, n))
-    h[:, 3:6] = np.eye(m)
-    predict(x, p, np.eye(n), np.eye(n))
-    update(x, p, np.zeros(m), h, np.eye(m), np.arange(3, 6, dtype=np.int64), np.inf, np.eye(n))
-    update(x, p, np.zeros(m), h, np.eye(m), NO_SELECTION, np.inf, np.eye(n))
-    joseph(x, p, np.zeros((n, m)), np.eye(m), np.zeros(m), h, np.eye(m), np.eye(n))

@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from alignment_core.compiled import kernel, on_warm_up
+from alignment_core.compiled import kernel
 from alignment_core.geometry.rotations_compiled import dcm_to_rotvec_k
 from alignment_core.navigation.strapdown import NavState
 
@@ -190,11 +190,6 @@ def relative_misalignment_k(c_m, c_na, p_rel):
     mu = dcm_to_rotvec_k(c[0, 0], c[1, 1], c[2, 2], c[0, 1], c[0, 2], c[1, 0], c[1, 2], c[2, 0], c[2, 1])
     d = np.dot(np.dot(c_na.T, p_rel), c_na)
     return np.array([mu[0], mu[1], mu[2]]), np.sqrt(np.array([d[0, 0], d[1, 1], d[2, 2]]))
-
-
-@on_warm_up
-def _warm_up() -> None:
-    relative_misalignment(np.eye(3), np.eye(3), np.eye(3))
 
 
 class ModelWrapper(ErrorModel):

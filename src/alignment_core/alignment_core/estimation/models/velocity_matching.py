@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from alignment_core.compiled import kernel, on_warm_up
+from alignment_core.compiled import kernel
 from alignment_core.estimation.models.base import (
     DV,
     EPS,
@@ -96,8 +96,6 @@ class NoiseDensities:
     accel_bias_rw: float
 
 
-
-
 def _fh_index(n: int) -> np.ndarray:
     """Flat indices of F h's non-zero cells in an (n, n) array, in the order transition() lists
     their values: [-w_in h x] at (0, 0), -C h at (0, 6), [f h x] at (3, 0),
@@ -150,12 +148,6 @@ def _transition(c_nb, f_n, w_ie, w_en, h, idx, n):
     phi = np.eye(n) + fh
     phi += half
     return phi
-
-
-@on_warm_up
-def _warm_up() -> None:
-    z3 = np.zeros(3)
-    transition(np.eye(3), z3, z3, z3, 0.01, N)
 
 
 def process_noise(q: NoiseDensities, h: float, n: int = N) -> np.ndarray:
