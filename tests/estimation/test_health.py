@@ -57,7 +57,7 @@ def test_a_corrupted_master_sample_breaks_the_filter_down_and_the_last_estimate_
     master = list(inp.master)
     master[k] = dataclasses.replace(master[k], v_b=master[k].v_b * 1e200)
     with warnings.catch_warnings():           # numpy's overflow warning (compiled kernels give none)
-        warnings.simplefilter('ignore', RuntimeWarning)
+        warnings.filterwarnings('ignore', message='overflow', category=RuntimeWarning)
         f = pipeline.align(sc, dataclasses.replace(inp, master=master))
     assert f.counters.numerical_failures == 1 and not f.healthy and 'not finite' in f.failure
     assert f.counters.updates == k - 1        # the first sample initialises

@@ -3,8 +3,10 @@
 A kernel is written once, as plain Python on floats and numpy arrays; `kernel` compiles it.
 Compiled and interpreted runs give the same numbers bit for bit (tests/test_compiled.py):
   - no fast-math, so LLVM neither reorders nor fuses (no FMA) the float operations;
-  - numba's np.dot and np.linalg.solve call the same BLAS and LAPACK routines as numpy
-    (OpenBLAS, with the kernels scripts/env.sh pins);
+  - numba's np.dot and np.linalg.solve call the BLAS and LAPACK routines numpy calls (gemm,
+    gemv, dot, gesv), from scipy's build of OpenBLAS rather than numpy's: with the CPU kernels
+    scripts/env.sh pins both round alike (the kernel tests and bench/same_numbers.py check it;
+    an upgrade of numpy or scipy must be checked again);
   - math.sin, cos, atan2 and sqrt are the C library's, as in Python.
 A kernel uses no numpy reduction (sum, mean, norm, ...): numpy sums pairwise, numba in order,
 and the two round differently; a sum is written as the loop the interpreted code also runs.
@@ -26,6 +28,8 @@ import hashlib
 import os
 import shutil
 import sys
+import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar, cast
@@ -34,6 +38,9 @@ F = TypeVar('F', bound=Callable[..., Any])
 
 PACKAGE = Path(__file__).resolve().parent
 CACHE_PREFIX = 'kernels-'
+STALE_S = 3600.0
+"""An older kernels-* directory is removed once unused this long (a process still running the
+sources of before an edit may use it)."""
 
 
 def _source_digest() -> str:
@@ -47,7 +54,7 @@ def _source_digest() -> str:
 def cache_dir() -> Path:
     """Where the kernels' machine code is cached: NUMBA_CACHE_DIR if the user set it, else
     __pycache__/kernels-<digest> in this package (or in ~/.cache/alignment_core where the
-    package is not writable); older kernels-* directories there are removed."""
+    package is not writable); other kernels-* directories there unused for STALE_S are removed."""
     given = os.environ.get('NUMBA_CACHE_DIR')
     if given:
         return Path(given)
@@ -58,10 +65,11 @@ def cache_dir() -> Path:
             if not os.access(root, os.W_OK):
                 continue
             for old in root.glob(CACHE_PREFIX + '*'):
-                if old.name != CACHE_PREFIX + digest:
+                if old.name != CACHE_PREFIX + digest and time.time() - old.stat().st_mtime > STALE_S:
                     shutil.rmtree(old, ignore_errors=True)
             path = root / (CACHE_PREFIX + digest)
             path.mkdir(exist_ok=True)
+            os.utime(path)
             return path
         except OSError:
             continue
@@ -77,14 +85,14 @@ class Kernel:
         self.dispatcher: Any = None
 
     def __call__(self, *args: Any) -> Any:
-        if self.dispatcher is None:
+        if not _active:
             activate()
         return self.dispatcher(*args)
 
     def __getattr__(self, name: str) -> Any:
         if name == 'dispatcher':
             raise AttributeError(name)
-        if self.dispatcher is None:
+        if not _active:
             activate()
         return getattr(self.dispatcher, name)
 
@@ -93,51 +101,55 @@ KERNELS: list[Kernel] = []
 """Every kernel made so far."""
 _ON_NUMBA: list[Callable[[], None]] = []
 _active = False
+_lock = threading.RLock()
 
 
 def kernel(fun: F) -> F:
     """fun compiled in nopython mode on its first call (Python's error model: a float division
     by zero raises ZeroDivisionError as it does interpreted), cached on disk."""
-    k = Kernel(fun)
-    KERNELS.append(k)
-    if _active:
-        _make_dispatcher(k)
-        return cast(F, k.dispatcher)
-    return cast(F, k)
+    with _lock:
+        k = Kernel(fun)
+        KERNELS.append(k)
+        if _active:
+            _make_dispatcher(k)
+            return cast(F, k.dispatcher)
+        return cast(F, k)
 
 
 def on_numba(call: Callable[[], None]) -> Callable[[], None]:
     """Register `call` to run once numba is imported, before any kernel compiles (a module's
     numba extensions: the overloads its kernels call)."""
-    _ON_NUMBA.append(call)
-    if _active:
-        call()
+    with _lock:
+        _ON_NUMBA.append(call)
+        if _active:
+            call()
     return call
 
 
 def _make_dispatcher(k: Kernel) -> None:
     import numba
-    k.dispatcher = numba.njit(cache=True, nogil=True)(k.py_func)
+    k.dispatcher = numba.njit(cache=True, nogil=True, error_model='python')(k.py_func)
 
 
 def activate() -> None:
     """Import numba, make every kernel's dispatcher and rebind the module globals that name a
     Kernel to its dispatcher (a kernel calling another must find a dispatcher)."""
     global _active
-    if _active:
-        return
-    import numba
-    numba.config.CACHE_DIR = str(cache_dir())   # type: ignore[attr-defined]  # read when a dispatcher is made
-    _active = True
-    for call in _ON_NUMBA:
-        call()
-    for k in KERNELS:
-        if k.dispatcher is None:
-            _make_dispatcher(k)
-    for module in list(sys.modules.values()):
-        names = getattr(module, '__dict__', None)
-        if not isinstance(names, dict):
-            continue
-        for name, value in list(names.items()):
-            if type(value) is Kernel:
-                names[name] = value.dispatcher
+    with _lock:             # one thread activates; the others wait for every dispatcher
+        if _active:
+            return
+        import numba
+        numba.config.CACHE_DIR = str(cache_dir())   # type: ignore[attr-defined]  # read when a dispatcher is made
+        for call in _ON_NUMBA:
+            call()
+        for k in KERNELS:
+            if k.dispatcher is None:
+                _make_dispatcher(k)
+        for module in list(sys.modules.values()):
+            names = getattr(module, '__dict__', None)
+            if not isinstance(names, dict):
+                continue
+            for name, value in list(names.items()):
+                if type(value) is Kernel:
+                    names[name] = value.dispatcher
+        _active = True

@@ -72,8 +72,8 @@ def test_joseph_compiled_equals_interpreted(dtypes):
 
 
 def test_the_filter_equals_the_textbook_update_it_replaced():
-    """The Joseph form written out in numpy (the filter's code before the kernels): the same
-    bits, selecting and full H."""
+    """The Joseph form written out with numpy's @ and inv, selecting and full H: the same to
+    rounding (the bit-for-bit checks are the compiled-against-interpreted ones above)."""
     rng = np.random.default_rng(9)
     for selecting in (True, False):
         x, p, z, h, r, _, eye = _problem(rng, selecting=selecting)
@@ -88,6 +88,16 @@ def test_the_filter_equals_the_textbook_update_it_replaced():
         want *= 0.5
         assert np.allclose(kf.x, x + k @ (z - h @ x), rtol=1e-13, atol=1e-15)
         assert np.allclose(kf.P, want, rtol=1e-13, atol=0.0)
+
+
+def test_a_scalar_measurement_is_one_row():
+    """numpy broadcast a scalar z against a (1, n) H; the filter still takes it."""
+    x, p = np.zeros(3), np.eye(3)
+    a, b = KalmanFilter(x, p), KalmanFilter(x, p)
+    h, r = np.array([[1.0, 0.0, 0.0]]), np.array([[1.0]])
+    a.update(np.float64(1.0), h, r)
+    b.update(np.array([1.0]), h, r)
+    assert np.array_equal(a.x, b.x) and np.array_equal(a.P, b.P) and a.x[0] == 0.5
 
 
 def test_a_non_finite_s_is_not_accepted_and_a_singular_one_raises():

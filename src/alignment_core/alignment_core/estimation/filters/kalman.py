@@ -88,6 +88,8 @@ class KalmanFilter(Counters):
                gate_chi2: float | None = None) -> UpdateResult:
         dt = self.dtype
         z, h, r = _ready(z, dt), _ready(h, dt), _ready(r, dt)
+        if z.ndim == 0:                       # one measurement given as a scalar
+            z = z.reshape(1)
         sel = self._selection(h)
         try:
             y, s, nis, accepted, x, p = kernels.update(
