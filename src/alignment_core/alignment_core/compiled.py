@@ -34,6 +34,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar, cast
 
+import numpy as np
+
 F = TypeVar('F', bound=Callable[..., Any])
 
 PACKAGE = Path(__file__).resolve().parent
@@ -74,6 +76,11 @@ def cache_dir() -> Path:
         except OSError:
             continue
     raise OSError('no writable directory for the compiled kernels: set NUMBA_CACHE_DIR')
+
+
+def as_float64(a: Any) -> np.ndarray:
+    """a as a float64 numpy array for a kernel (no copy when it is one already)."""
+    return a if type(a) is np.ndarray and a.dtype == np.float64 else np.asarray(a, dtype=np.float64)
 
 
 class Kernel:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from alignment_core.compiled import kernel
+from alignment_core.compiled import as_float64, kernel
 from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import quat_to_dcm
 from alignment_core.geometry.rotations_compiled import normalized_k, quat_mul_k, quat_to_dcm_k, rotvec_to_quat_k
@@ -55,16 +55,11 @@ class Strapdown:
         engine's history keeps references to the old ones)."""
         s = self.s
         self.c_start, self.w_ie, self.w_en, s.v_n, s.q_nb, f_n, s.lat, s.lon, s.h = step(
-            _as_f64(dtheta), _as_f64(dv), _as_f64(s.prev_dtheta), _as_f64(s.prev_dv), _as_f64(s.q_nb),
-            _as_f64(s.v_n), float(s.lat), float(s.lon), float(s.h), float(h))
+            as_float64(dtheta), as_float64(dv), as_float64(s.prev_dtheta), as_float64(s.prev_dv), as_float64(s.q_nb),
+            as_float64(s.v_n), float(s.lat), float(s.lon), float(s.h), float(h))
         s.prev_dtheta = dtheta
         s.prev_dv = dv
         return f_n
-
-
-def _as_f64(a) -> np.ndarray:
-    """a as a float64 array (no copy when it is one)."""
-    return a if type(a) is np.ndarray and a.dtype == np.float64 else np.asarray(a, dtype=np.float64)
 
 
 @kernel
@@ -93,10 +88,7 @@ def step(dtheta, dv, prev_dtheta, prev_dv, q_nb, v_n, lat0, lon0, h0, h):
     bz = d2 + 0.5 * r2 + (t0 * r1 - t1 * r0) / 6.0 + ((p0 * d1 - p1 * d0) + (u0 * t1 - u1 * t0)) / 12.0
     q0 = (q_nb[0], q_nb[1], q_nb[2], q_nb[3])
     cnb = quat_to_dcm_k(q0)
-    c_start = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            c_start[i, j] = cnb[3 * i + j]
+    c_start = np.array(cnb).reshape(3, 3)
     # dv_sf = C_b^n(start) dv_b
     fx = cnb[0] * bx + cnb[1] * by + cnb[2] * bz
     fy = cnb[3] * bx + cnb[4] * by + cnb[5] * bz

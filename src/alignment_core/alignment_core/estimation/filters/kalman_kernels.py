@@ -7,7 +7,7 @@ the same routines with the same types (numba's own np.dot takes one dtype, and n
 interpreted would solve a float32 S in float64).
 
 Shapes: x (n,), P (n, n), z (m,), H (m, n), R (m, m), sel (m,) int64 or (0,) (see update).
-Every array is float64, or every one float32."""
+Arrays are float64 or float32; mixed operands are promoted as numpy would (`dot`)."""
 from __future__ import annotations
 
 import numpy as np

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from alignment_core.compiled import kernel
+from alignment_core.compiled import as_float64, kernel
 from alignment_core.estimation.models.base import (
     DV,
     EPS,
@@ -115,18 +115,14 @@ def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.nda
     idx = _FH_INDEX.get(n)
     if idx is None:
         idx = _FH_INDEX[n] = _fh_index(n)
-    return _transition(_f64(c_nb), _f64(f_n), _f64(w_ie), _f64(w_en), float(h), idx, n)
-
-
-def _f64(a) -> np.ndarray:
-    return a if type(a) is np.ndarray and a.dtype == np.float64 else np.asarray(a, dtype=np.float64)
+    return _transition(as_float64(c_nb), as_float64(f_n), as_float64(w_ie), as_float64(w_en), float(h), idx, n)
 
 
 @kernel
 def _transition(c_nb, f_n, w_ie, w_en, h, idx, n):
     """I + F h + (F h)^2 / 2 with F h's 36 non-zero entries (in _fh_index's order) in float
     arithmetic; c_nb (3, 3), f_n, w_ie, w_en (3,), idx (36,) flat cell indices."""
-    c = c_nb.reshape(9) if c_nb.flags.c_contiguous else np.ascontiguousarray(c_nb).reshape(9)
+    c = (c_nb[0, 0], c_nb[0, 1], c_nb[0, 2], c_nb[1, 0], c_nb[1, 1], c_nb[1, 2], c_nb[2, 0], c_nb[2, 1], c_nb[2, 2])
     mh = -h
     ax, ay, az = mh * (w_ie[0] + w_en[0]), mh * (w_ie[1] + w_en[1]), mh * (w_ie[2] + w_en[2])
     bx, by, bz = h * f_n[0], h * f_n[1], h * f_n[2]
@@ -239,26 +235,17 @@ class VelocityMatching(ErrorModel):
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
         """log((C_m c_nom)^T C_a) with, for vm15, C_m corrected by phi_m (C_m = (I + [phi_m x]) C_m,est)
         and the sigma of phi - phi_m."""
-        return _misalignment(_f64(nav.q_nb), np.ascontiguousarray(nominal_attitude(m), dtype=np.float64),
-                             _f64(x), p, self._n == 15)
+        return _misalignment(as_float64(nav.q_nb), np.ascontiguousarray(nominal_attitude(m), dtype=np.float64),
+                             as_float64(x), p, self._n == 15)
 
 
 @kernel
 def _misalignment(q_nb, c_m, x, p, master_states):
     """VelocityMatching.misalignment compiled: q_nb (4,), C_m c_nom (3, 3), x (n,) float64,
     P (n, n) in the filter's dtype (p_rel is formed in it); master_states: x[12:15] is phi_m."""
-    cnb = quat_to_dcm_k((q_nb[0], q_nb[1], q_nb[2], q_nb[3]))
-    c_na = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            c_na[i, j] = cnb[3 * i + j]
+    c_na = np.array(quat_to_dcm_k((q_nb[0], q_nb[1], q_nb[2], q_nb[3]))).reshape(3, 3)
     if master_states:
-        cm = rotvec_to_dcm_k(x[12], x[13], x[14])
-        r = np.empty((3, 3))
-        for i in range(3):
-            for j in range(3):
-                r[i, j] = cm[3 * i + j]
-        c_m = np.dot(r, c_m)
+        c_m = np.dot(np.array(rotvec_to_dcm_k(x[12], x[13], x[14])).reshape(3, 3), c_m)
         p_rel = p[0:3, 0:3] - p[0:3, 12:15] - p[12:15, 0:3] + p[12:15, 12:15]
     else:
         p_rel = np.ascontiguousarray(p[0:3, 0:3])
