@@ -14,10 +14,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
-from alignment_core.estimation.reference_force import SpotAcceleration, reference_specific_force
+from alignment_core.estimation.reference_force import SpotAcceleration, reference_specific_force, spot_slope
+from alignment_core.geometry.rotations import cross
 from alignment_core.units import ARCMIN
 from alignment_core.validation import ConfigError
 
@@ -152,3 +154,24 @@ def test_the_delay_column_from_the_master_fit_finds_the_latency():
     assert abs(dt - 0.030) < 3.0 * sig and sig < 0.005
     dt, sig = _vector_ldv_delay('slave')
     assert 0.030 - dt > 5.0 * sig
+
+
+def test_the_compiled_fit_is_numpys_lstsq_bit_for_bit():
+    # random windows of random sizes: spot_slope (rows, then LAPACK's gelsd through numba) against
+    # the numpy code it replaced, stacked products and np.linalg.lstsq(rcond=None)
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        n = int(rng.integers(4, 80))
+        t = np.cumsum(rng.integers(15_000_000, 25_000_000, n)).astype(np.int64)
+        c = np.array([Rotation.from_rotvec(v).as_matrix() for v in rng.normal(0.0, 0.3, (n, 3))])
+        vw = rng.normal(0.0, 1.0, (n, 2, 3)) * [[5.0], [0.05]]
+        r = rng.normal(0.0, 20.0, 3)
+        x = vw[:, 0] + cross(vw[:, 1], r)
+        rows = np.matmul(c, x[:, :, None])[:, :, 0]
+        tau = (t - t[-1]) * 1e-9
+        want = np.linalg.lstsq(np.column_stack([np.ones_like(tau), tau, tau * tau]), rows, rcond=None)[0][1]
+        got_rows = np.zeros((n, 3))
+        got = spot_slope(t, c, vw, got_rows, r, 0, 0, n)
+        assert np.array_equal(got_rows, rows)
+        assert np.array_equal(got, want)
+        assert np.array_equal(spot_slope.py_func(t, c, vw, np.zeros((n, 3)), r, 0, 0, n), want)

@@ -29,7 +29,8 @@ import numpy as np
 
 from alignment_core.air_data.turbulence_spec import MIN_AIRSPEED, dryden_parameters
 from alignment_core.aircraft.gear_config import GearConfig
-from alignment_core.aircraft.landing_gear import N_DOF, GearModel
+from alignment_core.aircraft.landing_gear import N_DOF, GearModel, air_spring_excess_rows
+from alignment_core.compiled import kernel
 from alignment_core.recent_rows import RecentRows
 from alignment_core.rng import stage_rng
 
@@ -71,13 +72,36 @@ class DeckGust:
         """Normal numbers (n, 5) for the next n samples."""
         return self.rng.standard_normal((n, 5))
 
+    def series(self, noise: np.ndarray, load_matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The gusts (n, 3) at the next n samples from their noise (n, 5), and the loads (n, 9)
+        they make through load_matrix (9, 3)."""
+        x = np.zeros(0) if self.x is None else self.x
+        gust, load, self.x = gust_series(np.ascontiguousarray(noise, dtype=float), x, self.phi, self.root,
+                                         self.sigma, self.out, load_matrix)
+        return gust, load
+
     def step(self, noise: np.ndarray) -> np.ndarray:
         """The gust (3,) at the next sample from its noise (5,)."""
-        if self.x is None:
-            self.x = noise * np.array([1.0, 0.5, 0.5, 0.5, 0.5])           # stationary start
+        return self.series(np.asarray(noise, dtype=float).reshape(1, 5), np.zeros((N_DOF, 3)))[0][0]
+
+
+@kernel
+def gust_series(noise, x, phi, root, sigma, out, load_matrix):
+    """(gusts (n, 3), their loads load_matrix @ gust (n, 9), the last state (5,)) of the Dryden
+    state x (5,; empty before the first sample: its stationary start) driven by noise (n, 5)."""
+    n = noise.shape[0]
+    gust = np.empty((n, 3))
+    load = np.empty((n, load_matrix.shape[0]))
+    start = np.array([1.0, 0.5, 0.5, 0.5, 0.5])
+    for j in range(n):
+        if x.shape[0] == 0:
+            x = noise[j] * start
         else:
-            self.x = self.phi @ self.x + self.root @ noise
-        return self.sigma * (self.out @ self.x)
+            x = np.dot(phi, x) + np.dot(root, noise[j])
+        g = sigma * np.dot(out, x)
+        gust[j] = g
+        load[j] = np.dot(load_matrix, g)
+    return gust, load, x
 
 
 class GearResponse:
@@ -94,7 +118,7 @@ class GearResponse:
         self.dt = 1.0 / rate_hz
         self.dt_ns = int(round(1e9 / rate_hz))              # sample k is at tau = k dt_ns / 1e9, as stamps give it
         self.f0 = np.asarray(f0, dtype=float)
-        self.phi, self.g0, self.g1 = self.model.discretise(self.dt)
+        self.phi, self.g0, self.g1 = (np.ascontiguousarray(a) for a in self.model.discretise(self.dt))
         self.gust = DeckGust(cfg, seed, self.dt)
         self.gust_b = self.model.gust_matrix()
         self.holdback = holdback if cfg.holdback_tension_n > 0.0 else None
@@ -135,29 +159,24 @@ class GearResponse:
         load = self.model.inertial_load(specific_force[new], wdot[new], self.f0)
         if self.holdback is not None:
             load = load + self.holdback_tension(k * self.dt_ns / 1e9)[:, None] * self.holdback_b
-        noise = self.gust.draw(len(k)) if self.gust.on else None
+        if self.gust.on:
+            load = load + self.gust.series(self.gust.draw(len(k)), self.gust_b)[1]
         for rows in (self._q, self._qd, self._qdd):
             rows.forget_before(self._n - KEEP)
-        for j in range(len(k)):
-            f = load[j]
-            if noise is not None:
-                f = f + self.gust_b @ self.gust.step(noise[j])
-            if self._x is None:
-                self._x = np.concatenate([self.model.static(f), np.zeros(N_DOF)])
-            elif self._excess is None:
-                self._x = self.phi @ self._x + self.g0 @ self._load + self.g1 @ f
-            else:                                       # air springs: their excess predicted, then corrected
-                base = self.phi @ self._x + self.g0 @ (self._load + self._excess)
-                pred = base + self.g1 @ (f + self._excess)
-                self._x = base + self.g1 @ (f + self.model.nonlinear_load(pred[:N_DOF]))
-            self._load = f
-            if self.model.polytropic:
-                self._excess = self.model.nonlinear_load(self._x[:N_DOF])
-            q, qd = self._x[:N_DOF], self._x[N_DOF:]
-            self._q.append(q)
-            self._qd.append(qd)
-            self._qdd.append(self.model.acceleration(q, qd, f))
-            self._n += 1
+        start = self._x is None
+        if start:
+            self._x = np.concatenate([self.model.static(load[0]), np.zeros(N_DOF)])
+        m = self.model
+        q, qd, qdd, self._x, self._load, self._excess = step_samples(
+            np.ascontiguousarray(load), self._x, np.zeros(N_DOF) if start else self._load,
+            np.zeros(0) if self._excess is None else self._excess, start, m.polytropic, self.phi, self.g0,
+            self.g1, m.strut_rows, m.gas, m.leg_load_n, float(m.cfg.polytropic_index), m.C, m.K, np.diag(m.M).copy())
+        if not m.polytropic:
+            self._excess = None
+        self._q.extend(q)
+        self._qd.extend(qd)
+        self._qdd.extend(qdd)
+        self._n += len(k)
 
     def states(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """q, q', q'' (..., 9) at simulated sample indices k (...)."""
@@ -205,3 +224,44 @@ class GearResponse:
                + (-24*u + 84*u2 - 60*u3) * v1 / h + 0.5 * (6*u - 24*u2 + 20*u3) * a1)
         s = at_sample[..., None]
         return np.where(s, d0, pos), np.where(s, v0, vel), np.where(s, a0, acc)
+
+
+@kernel
+def step_samples(load, x, prev_load, excess, start, polytropic, phi, g0, g1, strut_rows, gas, leg_load, n,
+                 damping, stiffness, mass):
+    """Step the gear over the samples of load (K, 9): from x = [q, q'] (18,) at the sample
+    before them with its load prev_load and air-spring excess (9,; empty: none yet), or, with
+    start, from x at the first of them. Returns q, q', q'' (K, 9) and the last sample's x, load
+    and excess (empty if the springs are linear). Exact linear step with the load linear in
+    between; the air springs' excess by Heun's predictor-corrector (module docstring)."""
+    k_n = load.shape[0]
+    q = np.empty((k_n, 9))
+    qd = np.empty((k_n, 9))
+    qdd = np.empty((k_n, 9))
+    for j in range(k_n):
+        f = load[j]
+        if j == 0 and start:
+            pass
+        elif excess.shape[0] == 0:
+            x = np.dot(phi, x) + np.dot(g0, prev_load) + np.dot(g1, f)
+        else:                                       # air springs: their excess predicted, then corrected
+            base = np.dot(phi, x) + np.dot(g0, prev_load + excess)
+            pred = base + np.dot(g1, f + excess)
+            x = base + np.dot(g1, f + _spring_load(pred[:9], polytropic, strut_rows, gas, leg_load, n))
+        prev_load = f
+        if polytropic:
+            excess = _spring_load(x[:9], polytropic, strut_rows, gas, leg_load, n)
+        q[j] = x[:9]
+        qd[j] = x[9:]
+        qdd[j] = (f + _spring_load(x[:9], polytropic, strut_rows, gas, leg_load, n)
+                  - np.dot(x[9:], damping.T) - np.dot(x[:9], stiffness.T)) / mass
+    return q, qd, qdd, x, prev_load.copy(), excess
+
+
+@kernel
+def _spring_load(q, polytropic, strut_rows, gas, leg_load, n):
+    """GearModel.nonlinear_load of one q (9,)."""
+    if not polytropic:
+        return np.zeros(9)
+    compression = np.dot(-q, strut_rows.T)
+    return np.dot(air_spring_excess_rows(compression.reshape(1, 3), gas, leg_load, n)[0], strut_rows)

@@ -32,12 +32,38 @@ import numpy as np
 from scipy.linalg import expm
 
 from alignment_core.aircraft.gear_config import GearConfig
+from alignment_core.compiled import kernel
 from alignment_core.geometry.rotations import skew
 from alignment_core.units import G0
 from alignment_core.validation import ConfigError
 
 LEGS = ('nose', 'main_left', 'main_right')
 N_DOF = 9
+
+
+BOTTOMING = ("aircraft.gear: a strut compressed to within 5 % of its gas column (bottoming out): "
+             "beyond the air spring model")
+
+
+@kernel
+def air_spring_excess_rows(compression, gas, leg_load, n):
+    """The polytropic excess F0 ((1 - s / L)^-n - 1 - n s / L) (m, 3) of compressions s (m, 3),
+    gas columns L (3,), static loads F0 (3,), index n; ValueError if any s / L >= 0.95.
+    Element by element with the C library's pow (numpy's SIMD pow differs in the last bit)."""
+    m = compression.shape[0]
+    x = np.empty((m, 3))
+    for i in range(m):
+        for j in range(3):
+            x[i, j] = compression[i, j] / gas[j]
+    for i in range(m):
+        for j in range(3):
+            if x[i, j] >= 0.95:
+                raise ValueError(BOTTOMING)
+    out = np.empty((m, 3))
+    for i in range(m):
+        for j in range(3):
+            out[i, j] = leg_load[j] * ((1.0 - x[i, j]) ** -n - 1.0 - n * x[i, j])
+    return out
 
 
 def _airframe_rows(p: np.ndarray) -> np.ndarray:
@@ -198,12 +224,9 @@ class GearModel:
         positive): F0 ((1 - s / L)^-n - 1 - n s / L); zero for the linear spring."""
         if not self.polytropic:
             return np.zeros(np.shape(compression))
-        x = np.asarray(compression) / self.gas
-        if np.any(x >= 0.95):
-            raise ValueError("aircraft.gear: a strut compressed to within 5 % of its gas column "
-                             "(bottoming out): beyond the air spring model")
-        n = self.cfg.polytropic_index
-        return self.leg_load_n * ((1.0 - x) ** -n - 1.0 - n * x)
+        s = np.asarray(compression, dtype=float)
+        rows = np.ascontiguousarray(s.reshape(-1, 3))
+        return air_spring_excess_rows(rows, self.gas, self.leg_load_n, float(self.cfg.polytropic_index)).reshape(s.shape)
 
     def nonlinear_load(self, q: np.ndarray) -> np.ndarray:
         """Generalised force (..., 9) of the air springs' excess over their linear part."""

@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from alignment_core.geometry.rotations import cross, cross3
+from alignment_core.compiled import kernel
+from alignment_core.geometry.rotations import cross3
 
 MIN_FILL = 0.8
 """The fit is used once its samples span this fraction of the window (None before)."""
+EPS = float(np.finfo(np.float64).eps)
 
 
 class SpotAcceleration:
@@ -96,17 +98,31 @@ class SpotAcceleration:
         if r.tobytes() != self._rows_r:             # each row depends on the newest arm: recomputed when it moves
             self._rows_r = r.tobytes()
             self._rows_end = s
-        k = max(self._rows_end, s)
-        if k < e:
-            vw = self._vw[k:e]
-            x = vw[:, 0] + cross(vw[:, 1], r)
-            self._rows[k:e] = np.matmul(self._c[k:e], x[:, :, None])[:, :, 0]
-            self._rows_end = e
-        tau = (self._t[s:e] - self._t[e - 1]) * 1e-9
-        a = np.column_stack([np.ones_like(tau), tau, tau * tau])
-        coef, *_ = np.linalg.lstsq(a, self._rows[s:e], rcond=None)
-        self._value = coef[1]
+        self._value = spot_slope(self._t, self._c, self._vw, self._rows, r, max(self._rows_end, s), s, e)
+        self._rows_end = e
         return self._value
+
+
+@kernel
+def spot_slope(t, c, vw, rows, r, k, s, e):
+    """The slope at t[e - 1] (3,) of the quadratic least-squares fit (LAPACK's gelsd, numpy's
+    rcond) to the velocity rows [s, e) over times t (ns); rows [k, e) are first made from the
+    attitudes c (., 3, 3), ship-axes velocities and rates vw (., 2, 3) and the arm r (3,):
+    C (v + w x r)."""
+    for i in range(k, e):
+        v, w = vw[i, 0], vw[i, 1]
+        x = np.array([v[0] + (w[1] * r[2] - w[2] * r[1]), v[1] + (w[2] * r[0] - w[0] * r[2]),
+                      v[2] + (w[0] * r[1] - w[1] * r[0])])
+        rows[i] = np.dot(c[i], x)
+    n = e - s
+    a = np.empty((n, 3))
+    for i in range(n):
+        tau = (t[s + i] - t[e - 1]) * 1e-9
+        a[i, 0] = 1.0
+        a[i, 1] = tau
+        a[i, 2] = tau * tau
+    coef = np.linalg.lstsq(a, rows[s:e], rcond=EPS * max(n, 3))[0]
+    return coef[1].copy()
 
 
 def reference_specific_force(f_slave_n: np.ndarray, a_spot_n: np.ndarray, v_n: np.ndarray,
