@@ -55,14 +55,17 @@ def decode_all(t_ns: list[int], linear: np.ndarray, cov: np.ndarray) -> list[Ldv
         if finite.any():
             w[finite], vec[finite] = np.linalg.eigh(0.5 * (cov[finite] + cov[finite].transpose(0, 2, 1)))
     out = []
-    for i, t in enumerate(t_ns):
-        v = np.array(linear[i], dtype=float)
-        if not valid[i]:
+    linear = np.array(linear, dtype=float)           # one copy; each sample's v_s a row of it
+    beam = np.ascontiguousarray(vec[:, :, 2])
+    rows = zip(t_ns, valid.tolist(), finite.tolist(), trace.tolist(), w[:, 1].tolist(), c0.tolist())
+    for i, (t, ok, fin, tr, w1, var) in enumerate(rows):
+        v = linear[i]
+        if not ok:
             out.append(LdvSample(t_ns=t, v_s=v, sigma=math.nan, valid=False))
-        elif finite[i] and trace[i] > 0.0 and w[i, 1] <= BEAM_RANK_TOLERANCE * trace[i]:
-            out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(trace[i]), valid=True, beam=vec[i, :, 2]))
+        elif fin and tr > 0.0 and w1 <= BEAM_RANK_TOLERANCE * tr:
+            out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(tr), valid=True, beam=beam[i]))
         else:
-            out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(c0[i]), valid=True))
+            out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(var), valid=True))
     return out
 
 

@@ -242,8 +242,8 @@ class AugmentedModel(ModelWrapper):
     def _grow(self, a: np.ndarray, corner: float) -> np.ndarray:
         out = np.zeros((self.n, self.n))
         out[:self.nb, :self.nb] = a
-        k = np.arange(self.nb, self.n)
-        out[k, k] = corner
+        for k in range(self.nb, self.n):
+            out[k, k] = corner
         return out
 
     def initial_covariance(self) -> np.ndarray:
