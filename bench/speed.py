@@ -1,6 +1,8 @@
-"""Issue 17's numbers in one run: the engine's time per IMU step (15-state vm15, a 100 Hz master
+"""The speed goals' numbers in one run: the engine's time per IMU step (15-state vm15, a 100 Hz master
 match at every step) against filterpy's KalmanFilter predict + update at n = 15, m = 3 and against
-pyins; Monte Carlo runs per minute of the 300 s `deck` scenario at 1 and 2 workers; and, with
+pyins; Monte Carlo runs per minute of the 300 s `deck_paper` (the papers' parked deck) and `deck`
+(the carrier as it is: spectral sea, the aircraft on its gear, the master's own rate and
+latency) scenarios at 1 and 2 workers (--mc-scenarios); and, with
 --against REV, the same engine and Monte Carlo numbers of the code at git revision REV (its
 src/ extracted to a temporary directory), measured alternately with today's in the same run so
 both see the same machine load.
@@ -121,10 +123,10 @@ def pyins_us(seconds: float) -> dict:
     return {'pyins_us': 1e6 * t / n, 'pyins_steps': n}
 
 
-def mc_rpm(runs: int, workers: int) -> dict:
-    """Runs per minute of the 300 s deck scenario (scored as bench/monte_carlo.py does)."""
+def mc_rpm(runs: int, workers: int, scenario: str) -> dict:
+    """Runs per minute of a 300 s deck scenario (scored as bench/monte_carlo.py does)."""
     from alignment_experiments import monte_carlo
-    specs = [monte_carlo.RunSpec(index=i, cell='bench', scenario='deck_paper', overrides=(), seed=100 + i,
+    specs = [monte_carlo.RunSpec(index=i, cell='bench', scenario=scenario, overrides=(), seed=100 + i,
                                  score_at=250.0) for i in range(runs)]
     def cpu() -> float:          # this process and its reaped children (the pool's workers, once shut down)
         own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -143,7 +145,7 @@ def child(part: str, a: argparse.Namespace) -> None:
     elif part == 'pyins':
         out = pyins_us(a.peer_seconds)
     elif part.startswith('mc'):
-        out = mc_rpm(a.runs, int(part[2:]))
+        out = mc_rpm(a.runs, int(part[2:]), a.scenario)
     else:
         raise SystemExit(f'unknown part {part}')
     print(json.dumps(out))
@@ -159,12 +161,13 @@ def extract(rev: str, into: Path) -> str:
     return os.pathsep.join(str(into / 'src' / p) for p in PACKAGES)
 
 
-def run(part: str, a: argparse.Namespace, pythonpath: str | None) -> dict:
+def run(part: str, a: argparse.Namespace, pythonpath: str | None, scenario: str = 'deck_paper') -> dict:
     env = dict(os.environ)
     if pythonpath:
         env['PYTHONPATH'] = pythonpath + os.pathsep + env.get('PYTHONPATH', '')
     args = [sys.executable, __file__, '--child', part, '--runs', str(a.runs), '--seconds', str(a.seconds),
-            '--repeat', str(a.repeat), '--kf-steps', str(a.kf_steps), '--peer-seconds', str(a.peer_seconds)]
+            '--repeat', str(a.repeat), '--kf-steps', str(a.kf_steps), '--peer-seconds', str(a.peer_seconds),
+            '--scenario', scenario]
     p = subprocess.run(args, env=env, capture_output=True, text=True, cwd=ROOT)
     if p.returncode != 0:
         raise RuntimeError(f'{part}: {p.stderr[-2000:]}')
@@ -179,6 +182,9 @@ def main() -> None:
     ap.add_argument('--kf-steps', type=int, default=3000)
     ap.add_argument('--peer-seconds', type=float, default=20.0, help='simulated seconds of the pyins run')
     ap.add_argument('--graph-runs', type=int, default=1, help='runs of the default scenario through the graph')
+    ap.add_argument('--mc-scenarios', nargs='+', default=['deck_paper', 'deck'],
+                    help="the Monte Carlo's scenarios (300 s each): the papers' deck and the carrier as it is")
+    ap.add_argument('--scenario', default='deck_paper', help=argparse.SUPPRESS)
     ap.add_argument('--against', metavar='REV', help='also measure git revision REV (e.g. main) in the same run')
     ap.add_argument('--child', help=argparse.SUPPRESS)
     a = ap.parse_args()
@@ -193,7 +199,8 @@ def main() -> None:
         eng = {name: run('engine', a, pp) for name, pp in trees.items()}
         kf = run('kf', a, None)
         peer = run('pyins', a, None)
-        mc = {(name, w): run(f'mc{w}', a, pp) for w in (1, 2) for name, pp in trees.items()}
+        mc = {(sc, name, w): run(f'mc{w}', a, pp, sc) for sc in a.mc_scenarios for w in (1, 2)
+              for name, pp in trees.items()}
         from graph_rtf import graph as graph_run  # bench/graph_rtf.py: run_graph.sh at a real-time factor
         graphs = [graph_run(0.0) for _ in range(a.graph_runs)]
     print(f'\nengine per IMU step + 100 Hz master match (vm15, deck, {a.seconds:g} s, best of {a.repeat}):')
@@ -208,9 +215,9 @@ def main() -> None:
               f'-> the engine step is {peer["pyins_us"] / today:.0f}x faster')
     else:
         print('pyins: not installed (scripts/bench.sh installs requirements-bench.txt)')
-    print(f'Monte Carlo, 300 s deck, {a.runs} runs per setting:')
-    for (name, w), r in mc.items():
-        print(f'  {name:12s} workers={w}: {r["wall_s"]:7.1f} s  {r["runs_per_min"]:6.1f} runs/min  '
+    print(f'Monte Carlo, 300 s, {a.runs} runs per setting:')
+    for (sc, name, w), r in mc.items():
+        print(f'  {sc:10s} {name:12s} workers={w}: {r["wall_s"]:7.1f} s  {r["runs_per_min"]:6.1f} runs/min  '
               f'-> 100 runs in {100 / r["runs_per_min"]:5.1f} min; {r["cpu_s_per_run"]:5.1f} CPU s per run')
     for g in graphs:
         print(f'graph, default scenario, --real-time-factor 0: whole-run RTF {g["whole_run_rtf"]:.2f}, first message '
@@ -218,12 +225,12 @@ def main() -> None:
               + ', '.join(f'{n} {60.0 * c / g["sim_time_s"]:.1f}' for n, c in g['cpu_s'].items() if c is not None))
     if a.against:
         e0 = eng[a.against]['median_us']
-        print(f'today vs {a.against}: engine step {e0 / today:.2f}x faster; Monte Carlo '
-              + ', '.join(f'{w} worker(s) {mc[("today", w)]["runs_per_min"] / mc[(a.against, w)]["runs_per_min"]:.2f}x'
-                          for w in (1, 2))
-              + ' (wall); CPU per run ' + ', '.join(
-                  f'{w} worker(s) {mc[(a.against, w)]["cpu_s_per_run"] / mc[("today", w)]["cpu_s_per_run"]:.2f}x'
-                  for w in (1, 2)) + ' less')
+        print(f'today vs {a.against}: engine step {e0 / today:.2f}x faster')
+        for sc in a.mc_scenarios:
+            rpm = [mc[(sc, 'today', w)]['runs_per_min'] / mc[(sc, a.against, w)]['runs_per_min'] for w in (1, 2)]
+            cpu = [mc[(sc, a.against, w)]['cpu_s_per_run'] / mc[(sc, 'today', w)]['cpu_s_per_run'] for w in (1, 2)]
+            print(f'  Monte Carlo {sc}: 1 worker {rpm[0]:.2f}x, 2 workers {rpm[1]:.2f}x (wall); '
+                  f'CPU per run 1 worker {cpu[0]:.2f}x, 2 workers {cpu[1]:.2f}x less')
 
 
 if __name__ == '__main__':
