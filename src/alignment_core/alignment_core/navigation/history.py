@@ -22,6 +22,8 @@ spacing, else no measurement (LdvHistory).
 """
 from __future__ import annotations
 
+import math
+
 from collections import deque
 from dataclasses import dataclass
 
@@ -146,7 +148,7 @@ def _beam_between(a: LdvRecord, b: LdvRecord, f: float) -> np.ndarray | None:
     if a.beam is None or b.beam is None:
         return None
     u = a.beam + f * (b.beam - a.beam)
-    return u / np.linalg.norm(u)
+    return u / math.sqrt(u.dot(u))          # np.linalg.norm's numbers without its wrapper
 
 
 class LdvHistory:
