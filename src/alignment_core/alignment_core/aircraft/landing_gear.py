@@ -226,7 +226,8 @@ class GearModel:
             return np.zeros(np.shape(compression))
         s = np.asarray(compression, dtype=float)
         rows = np.ascontiguousarray(s.reshape(-1, 3))
-        return air_spring_excess_rows(rows, self.gas, self.leg_load_n, float(self.cfg.polytropic_index)).reshape(s.shape)
+        out = air_spring_excess_rows(rows, self.gas, self.leg_load_n, float(self.cfg.polytropic_index))
+        return out.reshape(s.shape)
 
     def nonlinear_load(self, q: np.ndarray) -> np.ndarray:
         """Generalised force (..., 9) of the air springs' excess over their linear part."""

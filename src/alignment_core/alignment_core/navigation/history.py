@@ -23,7 +23,6 @@ spacing, else no measurement (LdvHistory).
 from __future__ import annotations
 
 import math
-
 from collections import deque
 from dataclasses import dataclass
 
