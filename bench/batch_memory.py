@@ -19,20 +19,24 @@ Why: the batch pipeline keeps the whole run in memory by design (the filter is f
 every sample, and the engine is built with keep_history=True, so every estimate is kept); this
 states how much, so a long run's memory can be planned and a change that makes it worse shows.
 
-Measured 2026-12-02 on this 2-core machine (quiet; durations 300, 900, 3600 s; peak RSS 209.0,
-447.5, 1519.6 MiB; wall 20, 60, 290 s; the import-only child 87.5 MiB): the peak grows linearly
-with the duration, peak ~ 90 MiB + 1430 MiB per simulated hour (largest residual 0.1 MiB; about
-4 kB per 100 Hz sample), because every sample of the whole run is held in memory. The bound:
-peak ~ base + k x duration, base ~ 90 MiB (the interpreter and libraries), k ~ 1.43 GiB per
-simulated hour. The peak is reached inside simulate, not at the end: at 300 s tracemalloc puts it
-in SlaveImuStage.run_batch (AircraftKinematics.increments_batch / _on_deck: about ten rotation
-temporaries of 216 B per sample each, 27 float64, and einsum workspace) on top of the inputs
-made so far; the ship synthesis adds a fixed ~45 MiB workspace (the whole peak below ~120 s).
-What the run keeps after align (~615 MiB per simulated hour by the walk; RSS after align
-~ 90 + 941 MiB/h, the rest presumably freed heap not handed back): per-sample Python records with small numpy
-arrays: LDV 132, IMU 126, estimates 122 (3.5 kB each, 10 Hz), master 114 MiB/h (368-664 B per
-sample for 48-104 B of numbers); the arrays: ship batch 55, aircraft truth 36, sensor truth
-29 MiB/h.
+Measured 2026-12-03 on this 2-core machine (load average 0-0.8; `deck`, the carrier as it is;
+durations 300, 900, 3600 s; the kernels' cache warm): peak RSS 306.4, 545.1, 1625.9 MiB (wall 7,
+20, 89 s; the import-only child 67 MiB): peak ~ 186 MiB + 1440 MiB per simulated hour (largest
+residual 0.7 MiB; about 4 kB per 100 Hz sample), because every sample of the whole run is held in
+memory. The bound: peak ~ base + k x duration, base ~ 190 MiB, k ~ 1.44 GiB per simulated hour.
+The base holds the interpreter and libraries (67 MiB) and, since the landing gear's loop became a
+compiled kernel, numba (+56 MiB imported, +58 MiB once its first kernel is loaded: LLVM), now
+resident while simulate builds the inputs: the code before (`e8e4944`, numba imported only by the
+filter's kernels in align) gave 277.6, 449.2, 1534.6 MiB in the same session, peak ~ 134 MiB +
+1395 MiB/h. The peak is reached inside simulate, not at the end (earlier tracemalloc runs put it
+in SlaveImuStage.run_batch: AircraftKinematics.increments_batch / _on_deck, about ten rotation
+temporaries of 216 B per sample each, 27 float64, and einsum workspace, on top of the inputs made
+so far; the ship synthesis adds a fixed ~45 MiB workspace). What the run keeps after align (631
+MiB per simulated hour by the walk; RSS after align ~ 222 + 789 MiB/h, the rest presumably freed
+heap not handed back): per-sample Python records with small numpy arrays: LDV 132, IMU 126,
+estimates 122 (3.5 kB each, 10 Hz), master 114 MiB/h (368-664 B per sample for 48-104 B of
+numbers); the arrays: ship batch 55, aircraft truth 36, sensor truth 29, the filter's LDV history
+16.5 MiB/h.
 """
 from __future__ import annotations
 
