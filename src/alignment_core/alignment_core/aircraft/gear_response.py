@@ -163,12 +163,11 @@ class GearResponse:
             load = load + self.gust.series(self.gust.draw(len(k)), self.gust_b)[1]
         for rows in (self._q, self._qd, self._qdd):
             rows.forget_before(self._n - KEEP)
-        start = self._x is None
-        if start:
-            self._x = np.concatenate([self.model.static(load[0]), np.zeros(N_DOF)])
+        start = self._x is None            # the first sample starts in equilibrium
+        x0 = np.concatenate([self.model.static(load[0]), np.zeros(N_DOF)]) if start else self._x
         m = self.model
         q, qd, qdd, self._x, self._load, self._excess = step_samples(
-            np.ascontiguousarray(load), self._x, np.zeros(N_DOF) if start else self._load,
+            np.ascontiguousarray(load), x0, np.zeros(N_DOF) if start else self._load,
             np.zeros(0) if self._excess is None else self._excess, start, m.polytropic, self.phi, self.g0,
             self.g1, m.strut_rows, m.gas, m.leg_load_n, float(m.cfg.polytropic_index), m.C, m.K, np.diag(m.M).copy())
         if not m.polytropic:
