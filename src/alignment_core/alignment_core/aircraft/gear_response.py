@@ -124,6 +124,7 @@ class GearResponse:
         self.holdback = holdback if cfg.holdback_tension_n > 0.0 else None
         self.holdback_b = self.model.holdback_load()
         self.imu_rows = self.model.point_rows(np.asarray(cfg.imu_from_cg_m, dtype=float))
+        self._mass = np.diag(self.model.M).copy()          # M's diagonal (9,), for the stepping kernel
         self._q, self._qd, self._qdd = RecentRows(N_DOF), RecentRows(N_DOF), RecentRows(N_DOF)
         self._n = 0
         self._x: np.ndarray | None = None
@@ -169,7 +170,7 @@ class GearResponse:
         q, qd, qdd, self._x, self._load, self._excess = step_samples(
             np.ascontiguousarray(load), x0, np.zeros(N_DOF) if start else self._load,
             np.zeros(0) if self._excess is None else self._excess, start, m.polytropic, self.phi, self.g0,
-            self.g1, m.strut_rows, m.gas, m.leg_load_n, float(m.cfg.polytropic_index), m.C, m.K, np.diag(m.M).copy())
+            self.g1, m.strut_rows, m.gas, m.leg_load_n, float(m.cfg.polytropic_index), m.C, m.K, self._mass)
         if not m.polytropic:
             self._excess = None
         self._q.extend(q)
@@ -248,12 +249,12 @@ def step_samples(load, x, prev_load, excess, start, polytropic, phi, g0, g1, str
             pred = base + np.dot(g1, f + excess)
             x = base + np.dot(g1, f + _spring_load(pred[:9], polytropic, strut_rows, gas, leg_load, n))
         prev_load = f
+        spring = _spring_load(x[:9], polytropic, strut_rows, gas, leg_load, n)
         if polytropic:
-            excess = _spring_load(x[:9], polytropic, strut_rows, gas, leg_load, n)
+            excess = spring
         q[j] = x[:9]
         qd[j] = x[9:]
-        qdd[j] = (f + _spring_load(x[:9], polytropic, strut_rows, gas, leg_load, n)
-                  - np.dot(x[9:], damping.T) - np.dot(x[:9], stiffness.T)) / mass
+        qdd[j] = (f + spring - np.dot(x[9:], damping.T) - np.dot(x[:9], stiffness.T)) / mass
     return q, qd, qdd, x, prev_load.copy(), excess
 
 
