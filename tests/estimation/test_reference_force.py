@@ -12,6 +12,8 @@ a beam along x, and the heading is credited with information it does not have (d
 """
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -156,22 +158,43 @@ def test_the_delay_column_from_the_master_fit_finds_the_latency():
     assert 0.030 - dt > 5.0 * sig
 
 
-def test_the_compiled_fit_is_numpys_lstsq_bit_for_bit():
-    # random windows of random sizes: spot_slope (rows, then LAPACK's gelsd through numba) against
-    # the numpy code it replaced, stacked products and np.linalg.lstsq(rcond=None)
+def _exact_slope(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The least-squares quadratic's slope at tau = 0 (3,) in rational arithmetic on the same
+    floats: the normal equations A^T A c = A^T y solved by Cramer's rule, exactly."""
+    tf = [Fraction(float(v)) for v in tau]
+    cols = [[Fraction(1)] * len(tf), tf, [v * v for v in tf]]
+    ata = [[sum(a * b for a, b in zip(cols[i], cols[j])) for j in range(3)] for i in range(3)]
+
+    def det(m):
+        return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+    out = []
+    for axis in range(3):
+        yf = [Fraction(float(v)) for v in y[:, axis]]
+        atb = [sum(a * b for a, b in zip(cols[i], yf)) for i in range(3)]
+        m = [[atb[i] if j == 1 else ata[i][j] for j in range(3)] for i in range(3)]
+        out.append(float(det(m) / det(ata)))
+    return np.array(out)
+
+
+def test_the_fit_is_the_exact_least_squares_slope():
+    # random windows of random sizes: the rows are C (v + w x r) (numpy's stacked products, to
+    # rounding), and the slope is the exact least-squares one of those rows to 1e-14 of |y| / T
+    # (the orthogonal-polynomial fit is backward stable in a basis of condition ~1; LAPACK's
+    # gelsd on [1, tau, tau^2] is off by up to 8e-14 here); compiled and interpreted alike
     rng = np.random.default_rng(5)
-    for _ in range(200):
+    for _ in range(40):
         n = int(rng.integers(4, 80))
         t = np.cumsum(rng.integers(15_000_000, 25_000_000, n)).astype(np.int64)
         c = np.array([Rotation.from_rotvec(v).as_matrix() for v in rng.normal(0.0, 0.3, (n, 3))])
         vw = rng.normal(0.0, 1.0, (n, 2, 3)) * [[5.0], [0.05]]
         r = rng.normal(0.0, 20.0, 3)
         x = vw[:, 0] + cross(vw[:, 1], r)
-        rows = np.matmul(c, x[:, :, None])[:, :, 0]
+        want_rows = np.matmul(c, x[:, :, None])[:, :, 0]
+        rows = np.zeros((n, 3))
+        got = spot_slope(t, c, vw, rows, r, 0, 0, n)
+        np.testing.assert_allclose(rows, want_rows, rtol=0.0, atol=4 * np.finfo(float).eps * np.abs(x).max() * 3)
         tau = (t - t[-1]) * 1e-9
-        want = np.linalg.lstsq(np.column_stack([np.ones_like(tau), tau, tau * tau]), rows, rcond=None)[0][1]
-        got_rows = np.zeros((n, 3))
-        got = spot_slope(t, c, vw, got_rows, r, 0, 0, n)
-        assert np.array_equal(got_rows, rows)
-        assert np.array_equal(got, want)
-        assert np.array_equal(spot_slope.py_func(t, c, vw, np.zeros((n, 3)), r, 0, 0, n), want)
+        scale = np.abs(rows).max() / (tau[-1] - tau[0])
+        np.testing.assert_allclose(got, _exact_slope(tau, rows), rtol=0.0, atol=1e-14 * scale)
+        assert np.array_equal(spot_slope.py_func(t, c, vw, np.zeros((n, 3)), r, 0, 0, n), got)

@@ -23,7 +23,6 @@ from alignment_core.geometry.rotations import cross3
 
 MIN_FILL = 0.8
 """The fit is used once its samples span this fraction of the window (None before)."""
-EPS = float(np.finfo(np.float64).eps)
 
 
 class SpotAcceleration:
@@ -105,24 +104,53 @@ class SpotAcceleration:
 
 @kernel
 def spot_slope(t, c, vw, rows, r, k, s, e):
-    """The slope at t[e - 1] (3,) of the quadratic least-squares fit (LAPACK's gelsd, numpy's
-    rcond) to the velocity rows [s, e) over times t (ns); rows [k, e) are first made from the
-    attitudes c (., 3, 3), ship-axes velocities and rates vw (., 2, 3) and the arm r (3,):
-    C (v + w x r)."""
+    """The slope at t[e - 1] (3,) of the quadratic least-squares fit to the velocity rows
+    [s, e) over times t (ns); rows [k, e) are first made from the attitudes c (., 3, 3),
+    ship-axes velocities and rates vw (., 2, 3) and the arm r (3,): C (v + w x r).
+
+    The fit is taken in the polynomials orthogonal over the window's times (Forsythe's three-term
+    recurrence in tau = t - t[e - 1], s): p0 = 1, p1 = tau - a1, p2 = (tau - a2) p1 - b1, with
+    a1 = mean(tau), a2 = sum(tau p1^2) / sum(p1^2), b1 = sum(p1^2) / n. The coefficients are
+    independent projections d_j = sum(y p_j) / sum(p_j^2) (no normal matrix to invert), and the
+    slope at tau = 0 is d1 p1'(0) + d2 p2'(0) = d1 - (a1 + a2) d2. Needs four or more distinct times."""
+    r0, r1, r2 = r[0], r[1], r[2]
     for i in range(k, e):
-        v, w = vw[i, 0], vw[i, 1]
-        x = np.array([v[0] + (w[1] * r[2] - w[2] * r[1]), v[1] + (w[2] * r[0] - w[0] * r[2]),
-                      v[2] + (w[0] * r[1] - w[1] * r[0])])
-        rows[i] = np.dot(c[i], x)
+        w0, w1, w2 = vw[i, 1, 0], vw[i, 1, 1], vw[i, 1, 2]
+        x0 = vw[i, 0, 0] + (w1 * r2 - w2 * r1)
+        x1 = vw[i, 0, 1] + (w2 * r0 - w0 * r2)
+        x2 = vw[i, 0, 2] + (w0 * r1 - w1 * r0)
+        for a in range(3):
+            rows[i, a] = c[i, a, 0] * x0 + c[i, a, 1] * x1 + c[i, a, 2] * x2
     n = e - s
-    a = np.empty((n, 3))
+    tau = np.empty(n)
+    mean = 0.0
     for i in range(n):
-        tau = (t[s + i] - t[e - 1]) * 1e-9
-        a[i, 0] = 1.0
-        a[i, 1] = tau
-        a[i, 2] = tau * tau
-    coef = np.linalg.lstsq(a, rows[s:e], rcond=EPS * max(n, 3))[0]
-    return coef[1].copy()
+        tau[i] = (t[s + i] - t[e - 1]) * 1e-9
+        mean += tau[i]
+    a1 = mean / n
+    s11 = 0.0
+    m2 = 0.0
+    for i in range(n):
+        p1 = tau[i] - a1
+        s11 += p1 * p1
+        m2 += tau[i] * p1 * p1
+    a2 = m2 / s11
+    b1 = s11 / n
+    s22 = 0.0
+    y1 = np.zeros(3)
+    y2 = np.zeros(3)
+    for i in range(n):
+        p1 = tau[i] - a1
+        p2 = (tau[i] - a2) * p1 - b1
+        s22 += p2 * p2
+        for a in range(3):
+            y = rows[s + i, a]
+            y1[a] += y * p1
+            y2[a] += y * p2
+    out = np.empty(3)
+    for a in range(3):
+        out[a] = y1[a] / s11 - (a1 + a2) * (y2[a] / s22)
+    return out
 
 
 def reference_specific_force(f_slave_n: np.ndarray, a_spot_n: np.ndarray, v_n: np.ndarray,

@@ -121,18 +121,6 @@ def check_nis(nis: float) -> float:
     return nis
 
 
-def selection_indices(h: np.ndarray) -> np.ndarray | None:
-    """If every row of H is a unit row vector e_j^T (distinct j), the selected columns; else None."""
-    m, n = h.shape
-    nz = np.flatnonzero(h)
-    if nz.size != m or not np.all(h.flat[nz] == 1.0):
-        return None
-    rows, cols = np.divmod(nz, n)
-    if not np.array_equal(rows, np.arange(m)) or np.unique(cols).size != m:
-        return None
-    return cols
-
-
 def sqrt_psd(a: np.ndarray) -> np.ndarray:
     """G (n, k) with G G^T = a for a symmetric positive semi-definite a, in a's dtype; only the
     columns of non-zero variance are kept (k <= n). Diagonal: sqrt of the non-zero diagonal;

@@ -79,7 +79,7 @@ class _DelayedFading(KalmanFilter):
         self._check_outside_p()
         dt = self.dtype
         z, h, r = as_dtype(z, dt), as_dtype(h, dt), as_dtype(r, dt)
-        y, ph, s0, _ = self._innovation(z, h, r, self.x, self.P)
+        y, ph, s0 = self._innovation(z, h, r, self.x, self.P)
         s_inv = inv(s0)
         nis = check_nis(float(_dot(_dot(y, s_inv), y)))
         self.last_nis = nis
@@ -92,7 +92,7 @@ class _DelayedFading(KalmanFilter):
             p_faded = self._fade(y, h, r, s0)
             if p_faded is not None:
                 self.P = p_faded
-                _, ph, s, _ = self._innovation(z, h, r, self.x, self.P)
+                _, ph, s = self._innovation(z, h, r, self.x, self.P)
                 s_inv = inv(s)
         self.last_nis_faded = float(_dot(_dot(y, s_inv), y))
         self._joseph(y, ph, s_inv, h, r)

@@ -6,12 +6,10 @@ import math
 import numpy as np
 
 from alignment_core.estimation.filters import kalman_kernels as kernels
-from alignment_core.estimation.filters.base import Counters, UpdateResult, as_dtype, check_nis, selection_indices
+from alignment_core.estimation.filters.base import Counters, UpdateResult, as_dtype, check_nis
 
 __all__ = ['KalmanFilter', 'UpdateResult']
 
-_dot = np.dot
-_count_nonzero = np.count_nonzero
 _INF = float('inf')
 
 
@@ -29,22 +27,13 @@ class KalmanFilter(Counters):
     dtype: float64 (default) or float32; in float32 every internal array and every operation
     (matrix products, the inverse of S) is single precision.
 
-    Speed: predict and update run as compiled kernels (kalman_kernels.py, numpy's numbers bit
-    for bit). When H only selects states (every row a unit vector, e.g. velocity matching
-    H = [0 I 0]), H x, P H^T and H P H^T are taken by indexing instead of products; this
-    gives bit-for-bit the same numbers (the products only add exact zeros). The selection test
-    is cached on H's bytes; an H with more non-zeros than rows (most H that change from update
-    to update, e.g. vm15's lever-arm block or seed003's attitude rows) is rejected at once
-    without the cache (hashing and caching a new H every update cost more than the update)."""
+    Speed: predict and update run as compiled kernels (kalman_kernels.py): the products with H
+    over its non-zero cells only, the Joseph form in O(m n^2) operations instead of O(n^3)."""
 
     def __init__(self, x0: np.ndarray, p0: np.ndarray, dtype=np.float64) -> None:
         self.dtype = np.dtype(dtype)
         self.x = np.array(x0, dtype=self.dtype)
         self.P = np.array(p0, dtype=self.dtype)
-        self._eye = np.eye(len(self.x), dtype=self.dtype)
-        self._h_key: tuple | None = None
-        self._h_sel: np.ndarray | None = None
-        self._sel_cache: dict[tuple, np.ndarray | None] = {}
         self._init_counters()
 
     def reset_state(self, x: np.ndarray | None = None) -> None:
@@ -58,31 +47,9 @@ class KalmanFilter(Counters):
         self.x, self.P = kernels.predict(self.x, self.P, _ready(phi, dt), _ready(qd, dt))
         self.n_predicts += 1
 
-    def _selection(self, h: np.ndarray) -> np.ndarray | None:
-        """The state indices H selects (selection_indices), or None if H is not a selection."""
-        if _count_nonzero(h) != h.shape[0]:
-            return None
-        key = (h.shape, h.tobytes())
-        if key == self._h_key:
-            return self._h_sel
-        if key in self._sel_cache:
-            sel = self._sel_cache[key]
-        else:
-            sel = selection_indices(h)
-            if len(self._sel_cache) > 16:
-                self._sel_cache.clear()
-            self._sel_cache[key] = sel
-        self._h_key, self._h_sel = key, sel
-        return sel
-
     def _innovation(self, z, h, r, x, p):
-        """y = z - H x, P H^T, S = H P H^T + R (by indexing when H selects states)."""
-        sel = self._selection(h)
-        if sel is not None:
-            ph = p.take(sel, axis=1)
-            return z - x.take(sel), ph, ph.take(sel, axis=0) + r, sel
-        ph = _dot(p, h.T)
-        return z - _dot(h, x), ph, _dot(h, ph) + r, None
+        """(y = z - H x, P H^T, S = H P H^T + R) for the subclasses that change the prior."""
+        return kernels.innovation(x, p, z.reshape(1) if z.ndim == 0 else z, h, r)
 
     def update(self, z: np.ndarray, h: np.ndarray, r: np.ndarray,
                gate_chi2: float | None = None) -> UpdateResult:
@@ -90,11 +57,9 @@ class KalmanFilter(Counters):
         z, h, r = _ready(z, dt), _ready(h, dt), _ready(r, dt)
         if z.ndim == 0:                       # one measurement given as a scalar
             z = z.reshape(1)
-        sel = self._selection(h)
         try:
-            y, s, nis, accepted, x, p = kernels.update(
-                self.x, self.P, z, h, r, kernels.NO_SELECTION if sel is None else sel,
-                _INF if gate_chi2 is None else gate_chi2, self._eye)
+            y, s, nis, accepted, x, p = kernels.update(self.x, self.P, z, h, r,
+                                                       _INF if gate_chi2 is None else gate_chi2)
         except np.linalg.LinAlgError:           # S singular
             nis = math.nan
         if not nis < _INF:
@@ -111,4 +76,4 @@ class KalmanFilter(Counters):
         """x += K y, P <- (I - K H) P (I - K H)^T + K R K^T, symmetrised (the same operations as
         update(), for the subclasses that change the prior before updating)."""
         dt = self.dtype
-        self.x, self.P = kernels.joseph(self.x, self.P, ph, s_inv, y, _ready(h, dt), _ready(r, dt), self._eye)
+        self.x, self.P = kernels.joseph(self.x, self.P, ph, s_inv, y, _ready(h, dt), _ready(r, dt))

@@ -1,13 +1,15 @@
 """The Kalman filter's predict and Joseph-form update as compiled kernels (compiled.py).
 
-They are the operations KalmanFilter ran in numpy, in the same order, through the same BLAS and
-LAPACK routines, so the numbers are unchanged bit for bit; one call replaces about twenty numpy
-calls. `dot` and `inverse` are numpy's np.dot and base.inv when interpreted; compiled, they call
-the same routines with the same types (numba's own np.dot takes one dtype, and np.linalg.solve
-interpreted would solve a float32 S in float64).
+One call replaces about twenty numpy calls. The products with H run over H's non-zero cells
+(measurement matrices are sparse: a selection, a skew block) and the Joseph form in O(m n^2)
+(joseph); the predict's n x n products, the gain and the inverse of S are BLAS and LAPACK calls.
+`dot` and `inverse` are numpy's np.dot and base.inv when interpreted; compiled, they call the
+same routines with the same types (numba's own np.dot takes one dtype, and np.linalg.solve
+interpreted would solve a float32 S in float64), so compiled and interpreted give the same
+numbers bit for bit.
 
-Shapes: x (n,), P (n, n), z (m,), H (m, n), R (m, m), sel (m,) int64 or (0,) (see update).
-Arrays are float64 or float32; mixed operands are promoted as numpy would (`dot`)."""
+Shapes: x (n,), P (n, n), z (m,), H (m, n), R (m, m). Arrays are float64 or float32; mixed
+operands are promoted as numpy would (`dot`); loops accumulate in P's dtype (H x in x's)."""
 from __future__ import annotations
 
 import numpy as np
@@ -58,53 +60,84 @@ def predict(x, p, phi, qd):
 
 
 @kernel
-def update(x, p, z, h, r, sel, gate, eye):
-    """One measurement update: (y, S, nis, accepted, x+, P+); eye: the filter's identity (n, n).
-
-    sel: the state indices H selects when every row of H is a unit row (then P H^T, H x and
-    H P H^T are taken by indexing: the products would only add exact zeros), else empty.
-    Not accepted (x+, P+ are x, P) when nis > gate, or when S is not finite (nis is then NaN).
-    A singular S raises np.linalg.LinAlgError."""
+def innovation(x, p, z, h, r):
+    """(y = z - H x, P H^T, S = H P H^T + R), the products over H's non-zero cells only (a
+    selecting H, e.g. velocity matching's [0 I 0], costs a copy of P's columns)."""
     n = x.shape[0]
     m = z.shape[0]
-    if sel.shape[0] == m:
-        ph = np.empty((n, m), p.dtype)
-        for i in range(n):
-            for j in range(m):
-                ph[i, j] = p[i, sel[j]]
-        hx = np.empty(m, x.dtype)
-        hph = np.empty((m, m), p.dtype)
-        for j in range(m):
-            hx[j] = x[sel[j]]
-            for k in range(m):
-                hph[j, k] = ph[sel[j], k]
-    else:
-        ph = dot(p, h.T)
-        hx = dot(h, x)
-        hph = dot(h, ph)
-    y = z - hx
-    s = hph + r
+    ph = np.zeros((n, m), p.dtype)
+    hx = np.zeros(m, x.dtype)
+    for j in range(m):
+        for l in range(n):
+            v = h[j, l]
+            if v != 0.0:
+                hx[j] += v * x[l]
+                for i in range(n):
+                    ph[i, j] += p[i, l] * v
+    s = np.zeros((m, m), p.dtype)
+    for j in range(m):
+        for l in range(n):
+            v = h[j, l]
+            if v != 0.0:
+                for c in range(m):
+                    s[j, c] += v * ph[l, c]
+    return z - hx, ph, s + r
+
+
+@kernel
+def update(x, p, z, h, r, gate):
+    """One measurement update: (y, S, nis, accepted, x+, P+). Not accepted (x+, P+ are x, P)
+    when nis > gate, or when S is not finite (nis is then NaN). A singular S raises
+    np.linalg.LinAlgError."""
+    y, ph, s = innovation(x, p, z, h, r)
     if not np.all(np.isfinite(s)):
         return y, s, np.nan, False, x, p
     s_inv = inverse(s)
     nis = float(dot(dot(y, s_inv), y))
     if not nis < np.inf or nis > gate:
         return y, s, nis, False, x, p
-    x_new, p_new = joseph(x, p, ph, s_inv, y, h, r, eye)
+    x_new, p_new = joseph(x, p, ph, s_inv, y, h, r)
     return y, s, nis, True, x_new, p_new
 
 
 @kernel
-def joseph(x, p, ph, s_inv, y, h, r, eye):
+def joseph(x, p, ph, s_inv, y, h, r):
     """(x + K y, sym((I - K H) P (I - K H)^T + K R K^T)) with K = P H^T S^-1; ph = P H^T,
-    sym(A) = (A + A^T) / 2."""
+    sym(A) = (A + A^T) / 2. The Joseph form is evaluated in O(m n^2), without the n x n
+    products of I - K H: A = (I - K H) P = P - K (H P), then
+    A (I - K H)^T + K R K^T = A + (K R - A H^T) K^T; H's zero cells are skipped (a selecting
+    H costs a copy of its rows). Every element is accumulated in P's dtype."""
     k = dot(ph, s_inv)
     x_new = x + dot(k, y)
-    ikh = eye - dot(k, h)
-    a = dot(dot(ikh, p), ikh.T) + dot(dot(k, r), k.T)
+    n = p.shape[0]
+    m = h.shape[0]
+    kt = np.ascontiguousarray(k.T)                 # (m, n)
+    hp = np.zeros((m, n), p.dtype)                 # H P
+    for j in range(m):
+        for l in range(n):
+            v = h[j, l]
+            if v != 0.0:
+                for c in range(n):
+                    hp[j, c] += v * p[l, c]
+    a = p.copy()                                   # P - K (H P)
+    for i in range(n):
+        for j in range(m):
+            v = kt[j, i]
+            for c in range(n):
+                a[i, c] -= v * hp[j, c]
+    d = dot(k, r)                                  # K R - A H^T (n, m)
+    for j in range(m):
+        for l in range(n):
+            v = h[j, l]
+            if v != 0.0:
+                for i in range(n):
+                    d[i, j] -= a[i, l] * v
+    for i in range(n):                             # A + D K^T
+        for j in range(m):
+            v = d[i, j]
+            for c in range(n):
+                a[i, c] += v * kt[j, c]
     p_new = a + a.T
     p_new *= 0.5
     return x_new, p_new
 
-
-NO_SELECTION = np.zeros(0, np.int64)
