@@ -90,6 +90,22 @@ def test_delay_column_is_the_reference_rate_of_change():
     np.testing.assert_allclose(h[:, -1], np.concatenate([a_n, -w_n, c_a.T @ w_dot]), rtol=1e-12, atol=1e-18)
 
 
+def test_appended_constants_propagate_as_the_identity_however_nested():
+    """Random constants appended to a model (lever arm on master delay on vm15, the deck's stack)
+    have dx' = 0 and no coupling: Phi is the base's Phi with an identity block, exactly."""
+    from alignment_core.estimation.models import Propagation
+    from alignment_core.estimation.models.lever_arm import LeverArmStates
+    cfg = FilterConfig(model='vm15')
+    base = VelocityMatching(cfg, True)
+    model = LeverArmStates(MasterDelayState(base, 0.02), 1.0)
+    p = Propagation(C_M, np.array([0.2, -0.1, 9.8]), W_IN, np.array([1e-6, 2e-6, 0.0]), np.array([0.1, 5.0, 0.0]),
+                    0.7, 10.0, H)
+    phi = model.transition(p)
+    assert phi.shape == (19, 19)
+    assert np.array_equal(phi[:15, :15], base.transition(p))
+    assert np.array_equal(phi[15:, 15:], np.eye(4)) and not phi[15:, :15].any() and not phi[:15, 15:].any()
+
+
 def test_yaw_matching_keeps_the_velocity_rows_and_the_heading_row():
     cfg = FilterConfig(model='seed003_24')
     full = Seed003VelocityAttitude(cfg, True)

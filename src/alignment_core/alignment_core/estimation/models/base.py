@@ -253,7 +253,19 @@ class AugmentedModel(ModelWrapper):
         return self._grow(self.base.continuous(p), 0.0)
 
     def transition(self, p: Propagation) -> np.ndarray:
-        return self._grow(self.base.transition(p), 1.0)
+        return self._transition_of_size(p, self.n)
+
+    def _transition_of_size(self, p: Propagation, n: int) -> np.ndarray:
+        """Phi (n, n): the innermost non-augmented model's Phi with identity rows for every state
+        appended above it, grown once however many augmentations are nested (lever arm on delay)."""
+        base = self.base
+        if isinstance(base, AugmentedModel):
+            return base._transition_of_size(p, n)
+        out = np.zeros((n, n))
+        out[:self.nb, :self.nb] = base.transition(p)
+        for k in range(self.nb, n):
+            out[k, k] = 1.0
+        return out
 
     def process_noise(self, h: float) -> np.ndarray:
         qd = self._qd.get(h)
