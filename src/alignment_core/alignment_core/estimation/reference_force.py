@@ -32,8 +32,8 @@ class SpotAcceleration:
     relative velocity is not the spot's), fitted by a quadratic in time.
 
     The window's samples live in arrays (rows [start, end) of a buffer that doubles when full):
-    the velocity rows of the whole window are one stacked product, recomputed when the arm moves
-    (a filter estimating the arm moves it at every update), else only for the new samples."""
+    the velocity rows of the whole window are recomputed when the arm moves (a filter estimating
+    the arm moves it at every update), else only the new samples' (spot_slope)."""
 
     def __init__(self, window_s: float) -> None:
         if not window_s > 0.0:
