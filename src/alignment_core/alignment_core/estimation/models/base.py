@@ -239,10 +239,13 @@ class AugmentedModel(ModelWrapper):
         self.sigma = float(sigma)
         self._qd: dict[float, np.ndarray] = {}
 
-    def _grow(self, a: np.ndarray, corner: float) -> np.ndarray:
-        out = np.zeros((self.n, self.n))
+    def _grow(self, a: np.ndarray, corner: float, n: int | None = None) -> np.ndarray:
+        """a (nb, nb) in the top-left of an (n, n) zero matrix (n: this model's size), `corner`
+        on the diagonal below it."""
+        n = self.n if n is None else n
+        out = np.zeros((n, n))
         out[:self.nb, :self.nb] = a
-        for k in range(self.nb, self.n):
+        for k in range(self.nb, n):
             out[k, k] = corner
         return out
 
@@ -261,11 +264,7 @@ class AugmentedModel(ModelWrapper):
         base = self.base
         if isinstance(base, AugmentedModel):
             return base._transition_of_size(p, n)
-        out = np.zeros((n, n))
-        out[:self.nb, :self.nb] = base.transition(p)
-        for k in range(self.nb, n):
-            out[k, k] = 1.0
-        return out
+        return self._grow(base.transition(p), 1.0, n)
 
     def process_noise(self, h: float) -> np.ndarray:
         qd = self._qd.get(h)
