@@ -49,6 +49,7 @@ from alignment_ros.cli_options import (
     split_ros_args,
     unsigned_int,
 )
+from alignment_ros.dds_teardown import shut_down
 from alignment_ros.echo_format import ECHO_TRUNCATE_LENGTH, to_csv_header, to_csv_row, to_yaml
 from alignment_ros.topics import TOPIC_TYPES, msg_class
 
@@ -297,11 +298,12 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> int:
             node.create_subscription(cls, topic, printer, qos, raw=args.raw)
         while not (printer.done or stop['signal'] or stop['timeout']):
             executor.spin_once(timeout_sec=0.1)
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return EXIT_SIGNAL if stop['signal'] and not printer.done else 0
+    except BaseException:
+        shut_down(node, executor, status=1, signalled=stop['signal'])
+        raise
+    status = EXIT_SIGNAL if stop['signal'] and not printer.done else 0
+    shut_down(node, executor, status=status, signalled=stop['signal'])
+    return status
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -21,6 +21,7 @@ from rclpy.node import Node
 from alignment_core.validation import ConfigError
 
 from . import params, qos
+from .dds_teardown import shut_down
 from .heap import map_large_allocations, release_free_heap
 from .signals import stop_on_signals
 
@@ -259,5 +260,4 @@ def run(node_factory, spin: bool = True) -> None:
             node.get_logger().warning(
                 f'not every message was acknowledged within {ACK_TIMEOUT_S:.0f} s')
         node.write_stats()
-        node.destroy_node()
-        rclpy.try_shutdown()
+        shut_down(node, status=0, signalled=stop['signal'])

@@ -26,6 +26,7 @@ import re
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +47,7 @@ from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.topics import msg_class
 
+from .dds_teardown import shut_down
 from .signals import stop_on_signals
 
 NS = 1_000_000_000
@@ -244,8 +246,10 @@ def _sleep(seconds: float, stop: dict[str, bool]) -> bool:
 
 
 def play(args: argparse.Namespace, reader: BagReader, ros_argv: list[str],
-         overrides: dict[str, QoSProfile]) -> dict[str, Any]:
-    """Publish the bag; return the stats dict (PlayerError for what ends with status 1)."""
+         overrides: dict[str, QoSProfile],
+         report: Callable[[dict[str, Any]], None] = lambda stats: None) -> dict[str, Any]:
+    """Publish the bag; return the stats dict (PlayerError for what ends with status 1), given
+    to `report` first, while the node still exists (its teardown is bounded: dds_teardown.py)."""
     rclpy.init(args=ros_argv, signal_handler_options=SignalHandlerOptions.NO)
     stop = stop_on_signals()
     remaps = [a for rule in args.remap for a in ('--remap', rule)]
@@ -276,12 +280,25 @@ def play(args: argparse.Namespace, reader: BagReader, ros_argv: list[str],
         pb.progress.close(None if pb.last_ns is None else pb.last_ns / NS, pb.played)
         done.set()
         acked = pb.wait_acked()
-    finally:
-        done.set()
-        if ticker is not None:
-            ticker.join()
-        node.destroy_node()
-        rclpy.try_shutdown()
+        stats = _stats(args, reader, pb, stop, loops, wall, acked)
+        report(stats)
+    except BaseException:
+        _stop_ticker(done, ticker)
+        shut_down(node, status=1, signalled=stop['signal'])
+        raise
+    _stop_ticker(done, ticker)
+    shut_down(node, status=0, signalled=stop['signal'])
+    return stats
+
+
+def _stop_ticker(done: threading.Event, ticker: threading.Thread | None) -> None:
+    done.set()
+    if ticker is not None:
+        ticker.join()
+
+
+def _stats(args: argparse.Namespace, reader: BagReader, pb: Playback, stop: dict[str, bool], loops: int,
+           wall: float, acked: bool | None) -> dict[str, Any]:
     total = sum(pb.counts.values())
     return {
         'bag': str(args.bag_path),
@@ -316,10 +333,15 @@ def main(argv: list[str] | None = None) -> int:
             return 1
     try:
         reader = BagReader(args.bag_path)
-        stats = play(args, reader, ros_argv, overrides)
+        play(args, reader, ros_argv, overrides, lambda stats: _report(args, stats))
     except (BagError, PlayerError) as exc:
         print(f'player: {exc}', file=sys.stderr)
         return 1
+    return 0
+
+
+def _report(args: argparse.Namespace, stats: dict[str, Any]) -> None:
+    """The stats file and the closing lines."""
     if args.stats:
         path = Path(args.stats)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -333,7 +355,6 @@ def main(argv: list[str] | None = None) -> int:
     if stats['acked'] is False:
         print('player: not every message was acknowledged before --wait-for-all-acked',
               file=sys.stderr)
-    return 0
 
 
 if __name__ == '__main__':

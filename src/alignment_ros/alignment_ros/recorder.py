@@ -44,6 +44,7 @@ import json
 import sys
 import time
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -64,6 +65,7 @@ from alignment_ros.record_options import TopicFilter, parse_args
 from alignment_ros.record_progress import ProgressPublisher
 from alignment_ros.topics import CLOCK, msg_class
 
+from .dds_teardown import shut_down
 from .signals import stop_on_signals
 
 NS = 1_000_000_000
@@ -333,8 +335,10 @@ def _progress(rec: Recorder, progress: Progress, lines: bool) -> None:
         print(f'recorder progress {total} {t_ns}', flush=True)
 
 
-def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
-    """Record until an end condition; return the stats dict."""
+def run(args: argparse.Namespace, ros_argv: list[str],
+        report: Callable[[dict[str, Any]], None] = lambda stats: None) -> dict[str, Any]:
+    """Record until an end condition; return the stats dict, given to `report` first, while the
+    node still exists (its teardown is bounded: dds_teardown.py)."""
     writer = BagWriter(args.output, max_bag_duration_s=args.max_bag_duration,
                        max_bag_size=args.max_bag_size, compression_mode=args.compression_mode,
                        compression_format=args.compression_format, custom_data=args.custom_data)
@@ -349,25 +353,34 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> dict[str, Any]:
     rec: Recorder | None = None
     reached: ProgressPublisher | None = None
     try:
-        rec = Recorder(node, writer, args.typed, args.end_time, args.wait_topics,
-                       topic_filter=args.filter, use_sim_time=args.use_sim_time)
-        executor.add_node(node)
-        rec.discover()
-        print('recorder ready', flush=True)
-        progress = Progress('record', None, quiet=args.quiet)
-        if args.progress_topic is not None:
-            reached = ProgressPublisher(node, args.progress_topic, args.wait_topics, rec.last_stamp_ns)
-        reason, expected = _loop(args, rec, executor, stop, progress, reached)
-        t_ns = _reached_ns(rec)
-        progress.close(t_ns / NS if t_ns else None, sum(rec.counts.values()))
-    finally:
-        if rec is not None:
-            rec.finish_endpoints()
-            rec.note_publishers()
-        writer.close()
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+        try:
+            rec = Recorder(node, writer, args.typed, args.end_time, args.wait_topics,
+                           topic_filter=args.filter, use_sim_time=args.use_sim_time)
+            executor.add_node(node)
+            rec.discover()
+            print('recorder ready', flush=True)
+            progress = Progress('record', None, quiet=args.quiet)
+            if args.progress_topic is not None:
+                reached = ProgressPublisher(node, args.progress_topic, args.wait_topics, rec.last_stamp_ns)
+            reason, expected = _loop(args, rec, executor, stop, progress, reached)
+            t_ns = _reached_ns(rec)
+            progress.close(t_ns / NS if t_ns else None, sum(rec.counts.values()))
+        finally:
+            if rec is not None:
+                rec.finish_endpoints()
+                rec.note_publishers()
+            writer.close()
+        stats = _stats(args, rec, writer, reason, expected, reached)
+        report(stats)
+    except BaseException:
+        shut_down(node, executor, status=1, signalled=stop['signal'])
+        raise
+    shut_down(node, executor, status=0, signalled=stop['signal'])
+    return stats
+
+
+def _stats(args: argparse.Namespace, rec: Recorder, writer: BagWriter, reason: str,
+           expected: dict[str, int] | None, reached: ProgressPublisher | None) -> dict[str, Any]:
     span = (rec.last_rx - rec.first_rx) if rec.first_rx is not None else 0.0
     total = sum(rec.counts.values())
     return {
@@ -396,16 +409,17 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``recorder`` (scripts/record.sh)."""
     raw_argv = sys.argv if argv is None else ['recorder', *argv]
     args = parse_args(remove_ros_args(raw_argv)[1:])
+    def report(stats: dict[str, Any]) -> None:
+        if args.stats:
+            args.stats.parent.mkdir(parents=True, exist_ok=True)
+            args.stats.write_text(json.dumps(stats, indent=2) + '\n')
+        print(f'recorder done ({stats["end_reason"]}): {stats["total"]} messages in {args.output}',
+              flush=True)
     try:
-        stats = run(args, raw_argv)
+        run(args, raw_argv, report)
     except BagError as exc:
         print(f'recorder: {exc}', file=sys.stderr)
         return 1
-    if args.stats:
-        args.stats.parent.mkdir(parents=True, exist_ok=True)
-        args.stats.write_text(json.dumps(stats, indent=2) + '\n')
-    print(f'recorder done ({stats["end_reason"]}): {stats["total"]} messages in {args.output}',
-          flush=True)
     return 0
 
 
