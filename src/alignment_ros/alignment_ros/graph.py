@@ -31,6 +31,7 @@ from pathlib import Path
 
 import yaml
 
+from alignment_core import compiled
 from alignment_core.config import scenario as core_scenario
 from alignment_core.validation import ConfigError
 
@@ -274,6 +275,7 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
         if fork:
             for n in (*nodes_of(sc), 'ship_motion_node'):
                 forked.entry_point(n)      # every node's imports once, before the first fork
+            compiled.activate()            # numba too: the slave and the filter run kernels
         else:
             print(f'run_graph: nodes started through scripts/start_node.sh: {unsafe}', file=sys.stderr)
         for n in nodes_of(sc):
