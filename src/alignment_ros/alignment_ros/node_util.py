@@ -242,6 +242,7 @@ def run(node_factory, spin: bool = True) -> None:
     executor = EventsExecutor()
     executor.add_node(node)
     node.executor_ref = executor
+    failed = True          # an exception on its way out: a stuck teardown ends with status 1
     try:
         if spin:
             while rclpy.ok() and not stop['signal']:
@@ -249,6 +250,7 @@ def run(node_factory, spin: bool = True) -> None:
                 node.release_heap_if_due()
         else:
             node.run(lambda: stop['signal'])
+        failed = False
     finally:
         if hasattr(node, 'finish'):
             node.finish()
@@ -260,4 +262,4 @@ def run(node_factory, spin: bool = True) -> None:
             node.get_logger().warning(
                 f'not every message was acknowledged within {ACK_TIMEOUT_S:.0f} s')
         node.write_stats()
-        shut_down(node, status=0, signalled=stop['signal'])
+        shut_down(node, status=1 if failed else 0, signalled=stop['signal'])
