@@ -183,7 +183,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
         run.problems.append(f'the input is {repaired.damage}')
     run.use_domain(a.domain_id)
     clean_stale(log=lambda m: print(f'replay: {m}', file=sys.stderr))   # killed runs' /dev/shm
-    live = LiveProgress('replay', (end_ns - start_ns) * 1e-9, start_ns * 1e-9, quiet=a.quiet, clock=False)
+    live = LiveProgress('replay', (end_ns - start_ns) * 1e-9, start_ns * 1e-9, quiet=a.quiet)
     wall = _run(run, bag, params, play, wait, end_ns, damaged=repaired is not None, live=live)
     run.end(out / 'bag')
     s = None
