@@ -14,6 +14,10 @@ from typing import Any
 
 import yaml
 
+SAFE_LOADER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+"""yaml.safe_load's loader, through libyaml when PyYAML has it: a run's metadata (its QoS
+profiles are YAML inside the YAML) parsed in 0.27 s of pure Python before."""
+
 VERSION = 9
 ROS_DISTRO = os.environ.get('ROS_DISTRO') or 'jazzy'  # the rclpy wheels are Jazzy's
 INFINITE = {'sec': 9223372036, 'nsec': 854775807}  # RMW_DURATION_INFINITE, as rosbag2 writes it
@@ -175,7 +179,7 @@ def parse_qos(value: Any) -> list[dict[str, Any]]:
     """Offered QoS profiles from metadata or channel metadata (string or list, any version),
     with the policies as names (version 9 form)."""
     if isinstance(value, str):
-        value = yaml.safe_load(value) if value.strip() else []
+        value = yaml.load(value, Loader=SAFE_LOADER) if value.strip() else []
     out = []
     for p in value or []:
         q = dict(p)
@@ -220,7 +224,7 @@ def from_yaml(text: str) -> BagMetadata:
     """Parse metadata.yaml text (``rosbag2_bagfile_information`` at the top) or a ``rosbag2``
     MCAP metadata record's ``serialized_metadata`` (the map itself)."""
     try:
-        doc = yaml.safe_load(text)
+        doc = yaml.load(text, Loader=SAFE_LOADER)
     except yaml.YAMLError as exc:
         raise BagError(f'unreadable rosbag2 metadata: {exc}') from exc
     if not isinstance(doc, dict):
