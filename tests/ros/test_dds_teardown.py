@@ -86,3 +86,20 @@ def test_after_a_stop_signal_a_second_one_ends_a_stuck_teardown_at_once():
     assert p.returncode == -signal.SIGINT
     assert time.monotonic() - t0 < 5.0
     p.communicate()
+
+
+def test_a_deadline_that_cannot_be_armed_leaves_the_teardown_unbounded_and_says_so():
+    p = child('''
+        import io
+        import rclpy
+        from rclpy.node import Node
+        rclpy.init()
+        node = Node('teardown_probe')
+        sys.stderr = io.StringIO()          # no file descriptor: faulthandler cannot write to it
+        dds_teardown.shut_down(node, seconds=1.0)
+        said, sys.stderr = sys.stderr.getvalue(), sys.__stderr__
+        print('ok', rclpy.ok(), 'teardown not bounded' in said, flush=True)
+    ''')
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 0, err
+    assert out.split() == ['ok', 'False', 'True']

@@ -48,17 +48,20 @@ class _SigEvent(ctypes.Structure):
 
 
 class _TimeSpec(ctypes.Structure):
+    """struct timespec."""
     _fields_ = [('sec', ctypes.c_long), ('nsec', ctypes.c_long)]
 
 
 class _ITimerSpec(ctypes.Structure):
+    """struct itimerspec: no interval (one expiry), then the expiry."""
     _fields_ = [('interval', _TimeSpec), ('value', _TimeSpec)]
 
 
 class ExitDeadline:
     """Past `seconds`, every thread's stack on stderr, then the process ends with _exit(status):
     both from threads of C, so a main thread stuck in native code holding the GIL cannot stop
-    them. `cancel` disarms both. Linux (glibc) only, as the project."""
+    them. `cancel` disarms both. Linux (glibc) only, as the project. faulthandler has one
+    watchdog per process: arming this one replaces any other, and cancelling it clears it."""
 
     def __init__(self, seconds: float, status: int) -> None:
         self._libc = ctypes.CDLL(None, use_errno=True)
@@ -76,6 +79,7 @@ class ExitDeadline:
             raise OSError(ctypes.get_errno(), 'timer_settime failed')
 
     def cancel(self) -> None:
+        """Neither the stacks nor the exit (a notification already under way still exits)."""
         faulthandler.cancel_dump_traceback_later()
         if self._timer is not None:
             self._libc.timer_delete(self._timer)
@@ -93,11 +97,16 @@ def shut_down(node: Any, executor: Any = None, *, status: int = 0, signalled: bo
             signal.signal(s, signal.SIG_DFL)
     sys.stdout.flush()
     sys.stderr.flush()
-    deadline = ExitDeadline(seconds, status)
+    deadline: ExitDeadline | None = None
+    try:
+        deadline = ExitDeadline(seconds, status)
+    except (OSError, ValueError, RuntimeError, AttributeError) as e:     # no stderr file, no timer
+        print(f'teardown not bounded ({e})', file=sys.stderr, flush=True)
     try:
         if executor is not None:
             executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     finally:
-        deadline.cancel()
+        if deadline is not None:
+            deadline.cancel()

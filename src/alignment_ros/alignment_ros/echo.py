@@ -298,7 +298,9 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> int:
             node.create_subscription(cls, topic, printer, qos, raw=args.raw)
         while not (printer.done or stop['signal'] or stop['timeout']):
             executor.spin_once(timeout_sec=0.1)
-    except BaseException:
+    except BaseException as exc:
+        if isinstance(exc, EchoError):     # its line before a teardown that might not end
+            _say(exc)
         shut_down(node, executor, status=1, signalled=stop['signal'])
         raise
     status = EXIT_SIGNAL if stop['signal'] and not printer.done else 0
@@ -314,9 +316,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return run(args, ros_argv)
     except EchoError as exc:
-        sys.stdout.flush()
-        print(exc, file=sys.stderr)
+        _say(exc)
         return 1
+
+
+def _say(exc: EchoError) -> None:
+    """The error's message on stderr, once: before the teardown (which might not end), or here
+    for an error raised before the node existed."""
+    if not getattr(exc, 'said', False):
+        sys.stdout.flush()
+        print(exc, file=sys.stderr, flush=True)
+        exc.said = True  # type: ignore[attr-defined]
 
 
 if __name__ == '__main__':

@@ -282,7 +282,9 @@ def play(args: argparse.Namespace, reader: BagReader, ros_argv: list[str],
         acked = pb.wait_acked()
         stats = _stats(args, reader, pb, stop, loops, wall, acked)
         report(stats)
-    except BaseException:
+    except BaseException as exc:
+        if isinstance(exc, (BagError, PlayerError)):     # its line before a teardown that might not end
+            _say(exc)
         _stop_ticker(done, ticker)
         shut_down(node, status=1, signalled=stop['signal'])
         raise
@@ -292,6 +294,7 @@ def play(args: argparse.Namespace, reader: BagReader, ros_argv: list[str],
 
 
 def _stop_ticker(done: threading.Event, ticker: threading.Thread | None) -> None:
+    """The clock's ticks stopped."""
     done.set()
     if ticker is not None:
         ticker.join()
@@ -299,6 +302,7 @@ def _stop_ticker(done: threading.Event, ticker: threading.Thread | None) -> None
 
 def _stats(args: argparse.Namespace, reader: BagReader, pb: Playback, stop: dict[str, bool], loops: int,
            wall: float, acked: bool | None) -> dict[str, Any]:
+    """What the playback did (the --stats file)."""
     total = sum(pb.counts.values())
     return {
         'bag': str(args.bag_path),
@@ -335,9 +339,17 @@ def main(argv: list[str] | None = None) -> int:
         reader = BagReader(args.bag_path)
         play(args, reader, ros_argv, overrides, lambda stats: _report(args, stats))
     except (BagError, PlayerError) as exc:
-        print(f'player: {exc}', file=sys.stderr)
+        _say(exc)
         return 1
     return 0
+
+
+def _say(exc: BagError | PlayerError) -> None:
+    """The error's one line on stderr, once: before the teardown (which might not end), or here
+    for an error raised before the node existed."""
+    if not getattr(exc, 'said', False):
+        print(f'player: {exc}', file=sys.stderr, flush=True)
+        exc.said = True  # type: ignore[union-attr]
 
 
 def _report(args: argparse.Namespace, stats: dict[str, Any]) -> None:

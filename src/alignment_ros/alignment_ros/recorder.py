@@ -372,7 +372,9 @@ def run(args: argparse.Namespace, ros_argv: list[str],
             writer.close()
         stats = _stats(args, rec, writer, reason, expected, reached)
         report(stats)
-    except BaseException:
+    except BaseException as exc:
+        if isinstance(exc, BagError):      # its line before a teardown that might not end
+            _say(exc)
         shut_down(node, executor, status=1, signalled=stop['signal'])
         raise
     shut_down(node, executor, status=0, signalled=stop['signal'])
@@ -381,6 +383,7 @@ def run(args: argparse.Namespace, ros_argv: list[str],
 
 def _stats(args: argparse.Namespace, rec: Recorder, writer: BagWriter, reason: str,
            expected: dict[str, int] | None, reached: ProgressPublisher | None) -> dict[str, Any]:
+    """What the recording did (the --stats file)."""
     span = (rec.last_rx - rec.first_rx) if rec.first_rx is not None else 0.0
     total = sum(rec.counts.values())
     return {
@@ -409,18 +412,29 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``recorder`` (scripts/record.sh)."""
     raw_argv = sys.argv if argv is None else ['recorder', *argv]
     args = parse_args(remove_ros_args(raw_argv)[1:])
-    def report(stats: dict[str, Any]) -> None:
-        if args.stats:
-            args.stats.parent.mkdir(parents=True, exist_ok=True)
-            args.stats.write_text(json.dumps(stats, indent=2) + '\n')
-        print(f'recorder done ({stats["end_reason"]}): {stats["total"]} messages in {args.output}',
-              flush=True)
     try:
-        run(args, raw_argv, report)
+        run(args, raw_argv, lambda stats: _report(args, stats))
     except BagError as exc:
-        print(f'recorder: {exc}', file=sys.stderr)
+        _say(exc)
         return 1
     return 0
+
+
+def _say(exc: BagError) -> None:
+    """The error's one line on stderr, once: before the teardown (which might not end), or here
+    for an error raised before the node existed."""
+    if not getattr(exc, 'said', False):
+        print(f'recorder: {exc}', file=sys.stderr, flush=True)
+        exc.said = True  # type: ignore[attr-defined]
+
+
+def _report(args: argparse.Namespace, stats: dict[str, Any]) -> None:
+    """The stats file and the closing line."""
+    if args.stats:
+        args.stats.parent.mkdir(parents=True, exist_ok=True)
+        args.stats.write_text(json.dumps(stats, indent=2) + '\n')
+    print(f'recorder done ({stats["end_reason"]}): {stats["total"]} messages in {args.output}',
+          flush=True)
 
 
 if __name__ == '__main__':
