@@ -21,5 +21,7 @@ DIAGNOSTICS = QoSProfile(
 )
 
 WATCH = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
-"""A watcher of a stream's progress (the live progress line, the ship's lead): best effort, the
-latest few only; it never holds a writer back."""
+"""A watcher of a stream's progress (the ship's lead, the recorder's progress topic): best
+effort, the latest few only; it never holds a writer back."""
+NEWEST = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+"""The live progress line's reader (progress_watch.py): best effort, the newest message only."""
