@@ -136,7 +136,7 @@ def ldv_to_msg(s: LdvSample) -> TwistWithCovarianceStamped:
 
 def msg_to_ldv(m: TwistWithCovarianceStamped) -> LdvSample:
     """The LdvSample of /ldv/twist (`ldv_to_msg`; a rank-1 linear covariance is a beam)."""
-    cov = np.asarray(m.twist.covariance, dtype=float).reshape(6, 6)[:3, :3]
+    cov = np.array(m.twist.covariance, dtype=float).reshape(6, 6)[:3, :3]
     return ldv_wire.decode(to_ns(m.header.stamp), _a3(m.twist.twist.linear), cov)
 
 

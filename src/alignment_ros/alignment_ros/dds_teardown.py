@@ -86,6 +86,15 @@ class ExitDeadline:
             self._timer = None
 
 
+def say_once(exc: BaseException, text: str) -> None:
+    """An error's line on stderr, once: printed before a teardown that might not end, and not
+    again where the caller catches the error (which prints those raised before any node)."""
+    if not getattr(exc, 'said', False):
+        sys.stdout.flush()
+        print(text, file=sys.stderr, flush=True)
+        exc.said = True  # type: ignore[attr-defined]
+
+
 def shut_down(node: Any, executor: Any = None, *, status: int = 0, signalled: bool = False,
               seconds: float = TEARDOWN_TIMEOUT_S) -> None:
     """executor.shutdown(), node.destroy_node(), rclpy.try_shutdown() within `seconds`, else the

@@ -49,7 +49,7 @@ from alignment_ros.cli_options import (
     split_ros_args,
     unsigned_int,
 )
-from alignment_ros.dds_teardown import shut_down
+from alignment_ros.dds_teardown import say_once, shut_down
 from alignment_ros.echo_format import ECHO_TRUNCATE_LENGTH, to_csv_header, to_csv_row, to_yaml
 from alignment_ros.topics import TOPIC_TYPES, msg_class
 
@@ -300,7 +300,7 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> int:
             executor.spin_once(timeout_sec=0.1)
     except BaseException as exc:
         if isinstance(exc, EchoError):     # its line before a teardown that might not end
-            _say(exc)
+            say_once(exc, str(exc))
         shut_down(node, executor, status=1, signalled=stop['signal'])
         raise
     status = EXIT_SIGNAL if stop['signal'] and not printer.done else 0
@@ -316,17 +316,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return run(args, ros_argv)
     except EchoError as exc:
-        _say(exc)
+        say_once(exc, str(exc))
         return 1
-
-
-def _say(exc: EchoError) -> None:
-    """The error's message on stderr, once: before the teardown (which might not end), or here
-    for an error raised before the node existed."""
-    if not getattr(exc, 'said', False):
-        sys.stdout.flush()
-        print(exc, file=sys.stderr, flush=True)
-        exc.said = True  # type: ignore[attr-defined]
 
 
 if __name__ == '__main__':

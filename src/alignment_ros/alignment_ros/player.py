@@ -47,7 +47,7 @@ from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.topics import msg_class
 
-from .dds_teardown import shut_down
+from .dds_teardown import say_once, shut_down
 from .signals import stop_on_signals
 
 NS = 1_000_000_000
@@ -56,7 +56,6 @@ CLOCK_QOS = QoSProfile(history=QoSHistoryPolicy.KEEP_LAST, depth=1,
                        durability=QoSDurabilityPolicy.VOLATILE)
 """rclcpp::ClockQoS, which rosbag2 publishes /clock with."""
 log = logging.getLogger('player')
-
 
 
 class PlayerError(RuntimeError):
@@ -229,7 +228,6 @@ class Playback:
         return acked if asked else None
 
 
-
 FINAL_ACK_S = 1.0
 PROGRESS_EVERY = 50      # messages between progress updates (each is rate-limited too)
 
@@ -284,7 +282,7 @@ def play(args: argparse.Namespace, reader: BagReader, ros_argv: list[str],
         report(stats)
     except BaseException as exc:
         if isinstance(exc, (BagError, PlayerError)):     # its line before a teardown that might not end
-            _say(exc)
+            say_once(exc, f'player: {exc}')
         _stop_ticker(done, ticker)
         shut_down(node, status=1, signalled=stop['signal'])
         raise
@@ -339,17 +337,9 @@ def main(argv: list[str] | None = None) -> int:
         reader = BagReader(args.bag_path)
         play(args, reader, ros_argv, overrides, lambda stats: _report(args, stats))
     except (BagError, PlayerError) as exc:
-        _say(exc)
+        say_once(exc, f'player: {exc}')
         return 1
     return 0
-
-
-def _say(exc: BagError | PlayerError) -> None:
-    """The error's one line on stderr, once: before the teardown (which might not end), or here
-    for an error raised before the node existed."""
-    if not getattr(exc, 'said', False):
-        print(f'player: {exc}', file=sys.stderr, flush=True)
-        exc.said = True  # type: ignore[union-attr]
 
 
 def _report(args: argparse.Namespace, stats: dict[str, Any]) -> None:

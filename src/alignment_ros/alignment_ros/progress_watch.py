@@ -52,9 +52,9 @@ class GraphWatcher:
         rclpy.init(context=self._ctx, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
         node = Node(self.node_name, context=self._ctx, start_parameter_services=False,
                     enable_rosout=False)
-        node.create_subscription(Vector3Stamped, topics.ALIGN_MISALIGNMENT, self._on_estimate, qos.NEWEST)
-        node.create_subscription(Float64MultiArray, topics.ALIGN_STATE, self._on_state, qos.NEWEST)
-        node.create_subscription(Float64MultiArray, topics.AIR_DATA_STATE, self._on_air_data, qos.NEWEST)
+        subs = [node.create_subscription(Vector3Stamped, topics.ALIGN_MISALIGNMENT, self._on_estimate, qos.NEWEST),
+                node.create_subscription(Float64MultiArray, topics.ALIGN_STATE, self._on_state, qos.NEWEST),
+                node.create_subscription(Float64MultiArray, topics.AIR_DATA_STATE, self._on_air_data, qos.NEWEST)]
         executor = SingleThreadedExecutor(context=self._ctx)
         executor.add_node(node)
 
@@ -62,7 +62,7 @@ class GraphWatcher:
             try:
                 while self._ctx is not None and self._ctx.ok():
                     time.sleep(POLL_S)                   # meanwhile the newest replaces the older
-                    for _ in range(3):                   # each subscription's newest, if any
+                    for _ in subs:                       # each subscription's newest, if any
                         executor.spin_once(timeout_sec=0.0)
             except (ExternalShutdownException, RuntimeError):
                 pass

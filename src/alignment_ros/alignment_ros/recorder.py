@@ -65,7 +65,7 @@ from alignment_ros.record_options import TopicFilter, parse_args
 from alignment_ros.record_progress import ProgressPublisher
 from alignment_ros.topics import CLOCK, msg_class
 
-from .dds_teardown import shut_down
+from .dds_teardown import say_once, shut_down
 from .signals import stop_on_signals
 
 NS = 1_000_000_000
@@ -374,7 +374,7 @@ def run(args: argparse.Namespace, ros_argv: list[str],
         report(stats)
     except BaseException as exc:
         if isinstance(exc, BagError):      # its line before a teardown that might not end
-            _say(exc)
+            say_once(exc, f'recorder: {exc}')
         shut_down(node, executor, status=1, signalled=stop['signal'])
         raise
     shut_down(node, executor, status=0, signalled=stop['signal'])
@@ -415,17 +415,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         run(args, raw_argv, lambda stats: _report(args, stats))
     except BagError as exc:
-        _say(exc)
+        say_once(exc, f'recorder: {exc}')
         return 1
     return 0
-
-
-def _say(exc: BagError) -> None:
-    """The error's one line on stderr, once: before the teardown (which might not end), or here
-    for an error raised before the node existed."""
-    if not getattr(exc, 'said', False):
-        print(f'recorder: {exc}', file=sys.stderr, flush=True)
-        exc.said = True  # type: ignore[attr-defined]
 
 
 def _report(args: argparse.Namespace, stats: dict[str, Any]) -> None:

@@ -36,22 +36,8 @@ def encode(s: LdvSample) -> tuple[np.ndarray, np.ndarray]:
 
 
 def decode(t_ns: int, linear: np.ndarray, cov: np.ndarray) -> LdvSample:
-    """The LdvSample of a velocity (3,) and its linear covariance (3, 3) (`encode`): what
-    `decode_all` gives it in a stream, bit for bit (the same eigh of the same matrix, the same
-    sums), with scalar tests instead of the stack's masks (the filter node decodes each message
-    on its own)."""
-    c = np.asarray(cov, dtype=float)
-    v = np.array(linear, dtype=float)
-    cells = c.ravel().tolist()
-    var = cells[0]
-    if not var >= 0.0:                                  # NaN: not valid
-        return LdvSample(t_ns=t_ns, v_s=v, sigma=math.nan, valid=False)
-    tr = cells[0] + cells[4] + cells[8]
-    if tr > 0.0 and all(map(math.isfinite, cells)):
-        w, vec = np.linalg.eigh(0.5 * (c + c.T))
-        if float(w[1]) <= BEAM_RANK_TOLERANCE * tr:
-            return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(tr), valid=True, beam=vec[:, 2].copy())
-    return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(var), valid=True)
+    """The LdvSample of a velocity (3,) and its linear covariance (3, 3) (`encode`)."""
+    return decode_all([t_ns], np.asarray(linear, dtype=float)[None], np.asarray(cov, dtype=float)[None])[0]
 
 
 def decode_all(t_ns: list[int], linear: np.ndarray, cov: np.ndarray) -> list[LdvSample]:
