@@ -163,3 +163,58 @@ def test_a_held_estimate_is_told_from_a_fresh_one():
     from alignment_ros.plots.alignment import held
     mu = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 0, 0], [2, 0, 0], [3, 0, 0]])
     np.testing.assert_array_equal(held(mu), [False, False, False, True, True, False])
+
+
+def _with_motion(path: Path) -> Path:
+    """write_bag's topics and 2 s of /ship/odom (rolling 1 degree) and /ldv/twist at 10 Hz."""
+    from geometry_msgs.msg import TwistWithCovarianceStamped
+    from nav_msgs.msg import Odometry
+    write_bag(path, OLD, True)
+    more = path.parent / 'motion'
+    with BagWriter(more) as w:
+        w.add_topic('/ship/odom', 'nav_msgs/msg/Odometry')
+        w.add_topic('/ldv/twist', 'geometry_msgs/msg/TwistWithCovarianceStamped')
+        for k in range(21):
+            t = NS + k * NS // 10
+            o = Odometry()
+            o.header.stamp.sec, o.header.stamp.nanosec = t // NS, t % NS
+            roll = math.radians(1.0) * math.sin(k / 3)
+            o.pose.pose.orientation.x, o.pose.pose.orientation.w = math.sin(roll / 2), math.cos(roll / 2)
+            w.write('/ship/odom', serialize_message(o), t)
+            v = TwistWithCovarianceStamped()
+            v.header.stamp = o.header.stamp
+            v.twist.twist.linear.x = 0.01 * k
+            v.twist.covariance[0] = v.twist.covariance[7] = v.twist.covariance[14] = 1e-4
+            w.write('/ldv/twist', serialize_message(v), t)
+    return more
+
+
+def test_the_motion_figure_drawn_meanwhile_is_the_one_drawn_in_turn(tmp_path):
+    """read_and_draw forks the ship-motion figure off: the same files, bit for bit, and the same
+    list as reading and drawing every figure in one process."""
+    bag = tmp_path / 'bag'
+    more = _with_motion(bag)
+    in_turn = plots.draw_all([bag, more], tmp_path / 'in_turn')
+    series, meanwhile = plots.read_and_draw([bag, more], tmp_path / 'meanwhile')
+    assert [t for t, _ in meanwhile] == [t for t, _ in in_turn] == [
+        'Misalignment estimate', 'Estimated states', 'Innovation consistency (NIS)',
+        "Ship motion and the aircraft's deck velocity"]
+    for (_, a), (_, b) in zip(in_turn, meanwhile):
+        assert a.name == b.name and a.read_bytes() == b.read_bytes()
+    assert series.misalignment is not None and series.ship is None      # the child's topics stay there
+
+
+def test_an_error_in_either_process_reaches_the_caller(tmp_path, monkeypatch):
+    bag = tmp_path / 'bag'
+    more = _with_motion(bag)
+
+    def broken(*_):
+        raise ValueError('broken figure')
+    figures = plots.FIGURES
+    monkeypatch.setattr(plots, 'FIGURES', tuple((n, t, broken if n == 'motion' else f) for n, t, f in figures))
+    with pytest.raises(RuntimeError, match='the motion figure: ValueError: broken figure'):
+        plots.read_and_draw([bag, more], tmp_path / 'a')
+    monkeypatch.setattr(plots, 'FIGURES', tuple((n, t, broken if n == 'states' else f) for n, t, f in figures))
+    with pytest.raises(ValueError, match='broken figure'):        # this process's own error, the child waited for
+        plots.read_and_draw([bag, more], tmp_path / 'b')
+    assert (tmp_path / 'b' / 'motion.png').exists()

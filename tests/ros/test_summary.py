@@ -246,3 +246,47 @@ def test_a_state_recorded_out_of_order_is_paired_with_its_own_output(tmp_path):
     e = summary.estimates_from_bag(path)
     assert list(e['t_ns']) == [NS + k * NS // 10 for k in range(20)]
     assert e['sigma'][:, 0] == pytest.approx([1e-3 * (k + 1) for k in range(20)])
+
+
+def test_the_truth_attitude_is_found_by_its_header_stamp_not_its_log_time(tmp_path):
+    """A bag recorded with receive times (rosbag2's log time) holds /truth/aircraft/odom logged
+    5 ms after its stamp: the truth at the attitude's stamp is still the one stamped there (a
+    truth of another stamp, turned by 1 rad, would give a 1 rad error)."""
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    from nav_msgs.msg import Odometry
+
+    def more(w):
+        w.add_topic('/alignment/attitude', 'geometry_msgs/msg/PoseWithCovarianceStamped')
+        w.add_topic('/truth/aircraft/odom', 'nav_msgs/msg/Odometry')
+        for k in range(11):
+            t = NS + k * NS // 10
+            o = Odometry()
+            o.header.stamp.sec, o.header.stamp.nanosec = t // NS, t % NS
+            wrong = k != 10
+            o.pose.pose.orientation.z, o.pose.pose.orientation.w = math.sin(0.5 * wrong), math.cos(0.5 * wrong)
+            w.write('/truth/aircraft/odom', serialize_message(o), t + 5_000_000)
+            a = PoseWithCovarianceStamped()
+            a.header.stamp = o.header.stamp
+            a.pose.pose.orientation.w = 1.0
+            w.write('/alignment/attitude', serialize_message(a), t)
+    path = write_bag(tmp_path / 'bag', [TRUTH] * 11, [TRUTH] * 11, more)
+    s = summary.summarise(path, path, 1.0, 1.0, 1.0)
+    assert s['attitude_stamp_s'] == pytest.approx(2.0)
+    assert s['attitude_error_rad'] == pytest.approx([0.0, 0.0, 0.0], abs=1e-15)
+
+
+def test_a_bag_is_read_in_one_pass(bag, monkeypatch):
+    """Every pass over an MCAP file parses all its chunks: the summary reads the estimate topics
+    and the truth's (the same bag) together (/truth/aircraft/odom only when there is an attitude
+    to score, in a pass of its own: this bag has none)."""
+    from alignment_ros.bag import BagReader
+    passes = []
+    real = BagReader.messages
+
+    def counted(self, topics=None):
+        passes.append(tuple(sorted(topics or ())))
+        return real(self, topics)
+    monkeypatch.setattr(BagReader, 'messages', counted)
+    s = summary.summarise(bag, bag, 1.0, 2.0, 1.0)
+    assert s['misalignment_error_rad'] == pytest.approx([1e-3] * 3)
+    assert passes == [tuple(sorted(summary.ESTIMATE_TOPICS + summary.TRUTH_TOPICS))]

@@ -7,25 +7,24 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from rclpy.serialization import deserialize_message
 
 from . import topics
 from .air_data_convert import msg_to_labelled
-from .bag import read_bag
+from .bag_topics import BagTopics, topics_of
 from .convert import to_ns
-from .topics import msg_class
 
 SHOWN = (('mach', 1.0, ''), ('alpha_rad', 180.0 / np.pi, 'deg'), ('beta_rad', 180.0 / np.pi, 'deg'),
          ('tas_mps', 1.0, 'm/s'), ('wind_east_mps', 1.0, 'm/s'), ('wind_north_mps', 1.0, 'm/s'),
          ('wind_up_mps', 1.0, 'm/s'))
 SETTLE_S = 10.0
+TOPICS = (topics.AIR_DATA_STATE, topics.AIR_DATA_VELOCITY, topics.TRUTH_AIR_DATA_STATE, topics.TRUTH_WIND)
+"""What the score reads (the estimates and their stamps, the truth and its stamps)."""
 
 
-def _stamped_arrays(bag: Path, array_topic: str, stamp_topic: str) -> dict[int, tuple[tuple[str, ...], np.ndarray]]:
-    arrays, stamps = [], []
-    for m in read_bag(bag, (array_topic, stamp_topic)):
-        msg = deserialize_message(m.data, msg_class(m.type_name))
-        (arrays if m.topic == array_topic else stamps).append(msg)
+def _stamped_arrays(bag: Path | BagTopics, array_topic: str, stamp_topic: str
+                    ) -> dict[int, tuple[tuple[str, ...], np.ndarray]]:
+    have = topics_of(bag, (array_topic, stamp_topic))
+    arrays, stamps = have.decoded(array_topic), have.decoded(stamp_topic)
     out = {}
     for a, s in zip(arrays, stamps):
         _, labels, data = msg_to_labelled(a)
@@ -33,7 +32,7 @@ def _stamped_arrays(bag: Path, array_topic: str, stamp_topic: str) -> dict[int, 
     return out
 
 
-def score(bag: Path) -> dict | None:
+def score(bag: Path | BagTopics) -> dict | None:
     """{'estimates': N, 'rms': {label: ...}, 'last': {label: (error, sigma)}, 't_last_s'} or
     None when the bag holds no air-data estimate."""
     est = _stamped_arrays(bag, topics.AIR_DATA_STATE, topics.AIR_DATA_VELOCITY)

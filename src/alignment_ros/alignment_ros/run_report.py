@@ -185,9 +185,7 @@ def build(bags: list[Path], out: Path, s: dict | None, title: str, topics=None,
     """Draw the bags' plots into out/plots (or out itself when report_dir is given as out) and
     write report.md into report_dir (default out); return its path."""
     report_dir = report_dir or out
-    series = plots.read([b for b in bags if b is not None], topics)
-    series.scenario = scenario_next_to(*bags)
-    drawn = plots.draw(series, out)
+    series, drawn = plots.read_and_draw([b for b in bags if b is not None], out, topics, scenario_next_to(*bags))
     path = Path(report_dir) / 'report.md'
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(markdown(title, s, series, drawn, Path(report_dir)) + '\n')

@@ -29,22 +29,30 @@ from scipy.spatial.transform import Rotation
 from alignment_core.units import ARCMIN
 
 from . import air_data_summary, topics
-from .bag import read_bag, topic_counts
+from .bag import read_bag, stamp_reader, topic_counts
+from .bag_topics import BagTopics, topics_of
 from .convert import to_ns
 from .topics import msg_class
 
 SCORE_KEYS = ('misalignment_truth_rad', 'misalignment_estimate_rad', 'misalignment_sigma_rad',
               'misalignment_error_rad', 'scored_at_s', 'estimate_stamp_s', 'misalignment_valid_s')
+ESTIMATE_TOPICS = (topics.ALIGN_MISALIGNMENT, topics.ALIGN_STATE, topics.ALIGN_ATTITUDE, topics.DIAGNOSTICS,
+                   *air_data_summary.TOPICS)
+"""What the summary reads from the estimate bag, in one pass (bag_topics.py)."""
+TRUTH_TOPICS = (topics.TRUTH_MISALIGNMENT,)
+"""What it reads from the truth bag (and /truth/aircraft/odom at one stamp, in a pass of its own)."""
+
+Bag = Path | BagTopics
+"""A bag's path, or some of its topics already read."""
 
 
-def _read(bag: Path, names: tuple[str, ...]) -> dict[str, list]:
-    out: dict[str, list] = {n: [] for n in names}
-    for m in read_bag(bag, names):
-        out[m.topic].append(deserialize_message(m.data, msg_class(m.type_name)))
-    return out
+def _read(bag: Bag, names: tuple[str, ...]) -> dict[str, list]:
+    """The messages of each of `names`, deserialised."""
+    have = topics_of(bag, names)
+    return {n: have.decoded(n) for n in names}
 
 
-def estimates_from_bag(bag: Path) -> dict[str, np.ndarray]:
+def estimates_from_bag(bag: Bag) -> dict[str, np.ndarray]:
     """t_ns (N,), misalignment (N, 3), sigma (N, 3) from a bag of filter outputs: each
     misalignment with the /alignment/state of the same output, found by the stamp that message
     carries in its first row (it has no header: its place in the bag is when it arrived, and a
@@ -63,7 +71,7 @@ def estimates_from_bag(bag: Path) -> dict[str, np.ndarray]:
     return {'t_ns': t, 'misalignment': mu.reshape(-1, 3), 'sigma': sig.reshape(-1, 3)}
 
 
-def state_estimate(bag: Path, at_s: float | None = None) -> dict | None:
+def state_estimate(bag: Bag, at_s: float | None = None) -> dict | None:
     """The whole estimate from /alignment/state (convert.state_msg): the last message at or
     before `at_s` (the scored instant; None: the last one), as {t_s, labels (with their SI unit),
     estimate, sigma}; None without one (or in the older 4-row layout, which has no estimate)."""
@@ -82,7 +90,7 @@ def state_estimate(bag: Path, at_s: float | None = None) -> dict | None:
     return dict(zip(('t_s', 'labels', 'estimate', 'sigma'), best))
 
 
-def whiteness(bag: Path) -> dict | None:
+def whiteness(bag: Bag) -> dict | None:
     """The alignment filter's last /diagnostics: its innovation whiteness window (pass / fail,
     Ljung-Box q, dof, p, the largest lag-1 autocorrelation and the white band; estimation/
     whiteness.py) and where the relative velocity came from; None before a completed window."""
@@ -110,7 +118,7 @@ def whiteness_line(w: dict | None) -> str:
             f"{w['windows']} windows failed); relative velocity: {w['relative_velocity']}")
 
 
-def truth_from_bag(bag: Path, until_ns: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+def truth_from_bag(bag: Bag, until_ns: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Every /truth/misalignment stamped at or before until_ns (if given): stamps (K,) ns and
     vectors (K, 3) rad; ValueError if there is none."""
     d = [m for m in _read(bag, (topics.TRUTH_MISALIGNMENT,))[topics.TRUTH_MISALIGNMENT]
@@ -121,7 +129,7 @@ def truth_from_bag(bag: Path, until_ns: int | None = None) -> tuple[np.ndarray, 
             np.array([[m.vector.x, m.vector.y, m.vector.z] for m in d]))
 
 
-def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: float,
+def summarise(truth_bag: Bag, estimate_bag: Bag, start_s: float, duration_s: float,
               wall_time_s: float, published: dict[str, int] | None = None,
               foreign_publishers: dict[str, list[str]] | None = None,
               problems: list[str] | None = None, published_known: bool = True,
@@ -132,7 +140,11 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     saw). The simulated time claimed is the one the filter's outputs reached; published_known
     False: some publishers' counts are missing (more may be lost than `lost` says); `truth`
     False: the input has no truth (the last estimate and its 1-sigma are reported instead);
-    latency_s: the master latency the filter is told (its estimates' time of validity)."""
+    latency_s: the master latency the filter is told (its estimates' time of validity). Each
+    bag is read in one pass (`ESTIMATE_TOPICS`, `TRUTH_TOPICS`; both for a bag that is both)."""
+    same = _path(truth_bag) == _path(estimate_bag)
+    estimate_bag = topics_of(estimate_bag, ESTIMATE_TOPICS + (TRUTH_TOPICS if same else ()))
+    truth_bag = estimate_bag if same else topics_of(truth_bag, TRUTH_TOPICS)
     end_ns = round((start_s + duration_s) * 1e9)
     until_ns = end_ns + 1000                   # 1 us: the end given as float seconds
     est = estimates_from_bag(estimate_bag)
@@ -146,8 +158,8 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
              else _estimate_only(est, problems))
     if truth and score.get('scored_at_s') is not None:
         score.update(_attitude_score(truth_bag, estimate_bag, round(score['scored_at_s'] * 1e9)))
-    own = topic_counts(estimate_bag)
-    counts = {**topic_counts(truth_bag), **own} if Path(truth_bag) != Path(estimate_bag) else own
+    own = topic_counts(estimate_bag.path)
+    counts = own if same else {**topic_counts(truth_bag.path), **own}
     pub = published or {}
     lost = {k: max(0, pub[k] - counts.get(k, 0)) for k in sorted(pub)}
     foreign = {k: n - pub.get(k, 0) for k, n in sorted(own.items()) if pub and n > pub.get(k, 0)}
@@ -186,7 +198,7 @@ def summarise(truth_bag: Path, estimate_bag: Path, start_s: float, duration_s: f
     }
 
 
-def _held_validity(bag: Path, since_ns: int, fallback_ns: int) -> int:
+def _held_validity(bag: Bag, since_ns: int, fallback_ns: int) -> int:
     """The time of validity of an estimate held since the output at since_ns: the filter's first
     /diagnostics from then on says it (`misalignment_valid_ns`, its last match's); fallback_ns if
     none does (an older bag) or the one found is later (a new match)."""
@@ -202,7 +214,7 @@ def _held_validity(bag: Path, since_ns: int, fallback_ns: int) -> int:
     return fallback_ns
 
 
-def _score(truth_bag: Path, estimate_bag: Path, est: dict[str, np.ndarray], problems: list[str],
+def _score(truth_bag: Bag, estimate_bag: Bag, est: dict[str, np.ndarray], problems: list[str],
            optional: bool = False, until_ns: int | None = None, latency_ns: int = 0) -> dict:
     """The last estimate of deck matching against the truth at its time of validity (its stamp
     less the master latency the filter is told; the relative attitude moves on the gear and a
@@ -240,7 +252,22 @@ def _score(truth_bag: Path, estimate_bag: Path, est: dict[str, np.ndarray], prob
     }
 
 
-def _attitude_score(truth_bag: Path, estimate_bag: Path, at_ns: int | None) -> dict:
+def _path(bag: Bag) -> Path:
+    return bag.path if isinstance(bag, BagTopics) else Path(bag)
+
+
+def _truth_odometry_at(bag: Bag, t_ns: int):
+    """The last /truth/aircraft/odom stamped t_ns, or None: the stamps are read from the raw
+    bytes (bag.stamp_reader) and only that message is deserialised."""
+    found = None
+    for m in read_bag(_path(bag), (topics.TRUTH_AIRCRAFT_ODOM,)):
+        stamp = stamp_reader(m.type_name)
+        if stamp is not None and stamp(m.data) == t_ns:
+            found = m
+    return None if found is None else deserialize_message(found.data, msg_class(found.type_name))
+
+
+def _attitude_score(truth_bag: Bag, estimate_bag: Bag, at_ns: int | None) -> dict:
     """The slave attitude error at the last /alignment/attitude stamped at or before at_ns against
     /truth/aircraft/odom at that stamp (C_est = (I - [phi x]) C_true, nav frame ENU, rad) and its
     1-sigma; {} without the topics or an exact truth stamp (both run on the IMU's clock)."""
@@ -252,11 +279,10 @@ def _attitude_score(truth_bag: Path, estimate_bag: Path, at_ns: int | None) -> d
         return {}
     a = att[-1]
     t = to_ns(a.header.stamp)
-    truth = [m for m in _read(truth_bag, (topics.TRUTH_AIRCRAFT_ODOM,))[topics.TRUTH_AIRCRAFT_ODOM]
-             if to_ns(m.header.stamp) == t]
-    if not truth:
+    truth = _truth_odometry_at(truth_bag, t)
+    if truth is None:
         return {}
-    q = truth[-1].pose.pose.orientation
+    q = truth.pose.pose.orientation
     o = a.pose.pose.orientation
     phi = (Rotation.from_quat([q.x, q.y, q.z, q.w]) * Rotation.from_quat([o.x, o.y, o.z, o.w]).inv()).as_rotvec()
     cov = np.asarray(a.pose.covariance, dtype=float).reshape(6, 6)[3:, 3:]

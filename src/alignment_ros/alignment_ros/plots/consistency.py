@@ -12,7 +12,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import chi2
+
+# the chi-square quantiles from scipy.special, what scipy.stats' chi2.isf and chi2.ppf call (the
+# same numbers): scipy.stats alone would add ~0.4 s to every run's report
+from scipy.special import chdtri, gammaincinv
 
 from alignment_core.estimation.config import FilterConfig
 
@@ -33,12 +36,17 @@ def monitor_settings(scenario: dict | None = None) -> tuple[int, float]:
             float(f.get('consistency_warn_p', d.consistency_warn_p)))
 
 
+def _central_95(dof: int) -> np.ndarray:
+    """The 2.5 % and 97.5 % quantiles of chi2(dof) (chi2.ppf's formula)."""
+    return 2.0 * gammaincinv(dof / 2, np.array([0.025, 0.975]))
+
+
 def update_dof(bound_per_dof: float, window: int, warn_p: float) -> int | None:
     """The dof of one update, from a window's published bound per dof (None if no dof fits)."""
     if not np.isfinite(bound_per_dof) or bound_per_dof <= 0:
         return None
     dofs = np.arange(window, 64 * window + 1, window)
-    per = chi2.isf(warn_p, dofs) / dofs
+    per = chdtri(dofs, warn_p) / dofs
     k = int(np.argmin(np.abs(per - bound_per_dof)))
     return int(dofs[k] // window) if abs(per[k] - bound_per_dof) <= 2e-3 * bound_per_dof else None
 
@@ -63,7 +71,7 @@ def _panel_updates(ax, d: Diagnostic, dof: int | None) -> None:
         return
     ax.semilogy(d.t_s[ok], nis[ok], '.', ms=3, color='tab:blue', label='NIS of the last update')
     if dof is not None:
-        lo, hi = chi2.ppf([0.025, 0.975], dof)
+        lo, hi = _central_95(dof)
         ax.axhspan(lo, hi, color='tab:green', alpha=0.12, label=f'95 % band, χ²({dof})')
         ax.axhline(dof, color='tab:green', lw=0.8, ls='--')
         inside = np.mean((nis[ok] >= lo) & (nis[ok] <= hi))
@@ -82,7 +90,7 @@ def _panel_windows(ax, d: Diagnostic, window: int, dof: int | None) -> None:
     ax.plot(d.t_s[ok], bound[ok], color='tab:red', lw=1.0, label='monitor bound (fails above)')
     if dof is not None:
         n = window * dof
-        lo, hi = chi2.ppf([0.025, 0.975], n) / n
+        lo, hi = _central_95(n) / n
         ax.axhspan(lo, hi, color='tab:green', alpha=0.12, label=f'95 % band, χ²({n}) / {n}')
     ax.axhline(1.0, color='grey', lw=0.6)
     ax.set_ylabel('NIS / dof (-)')
