@@ -78,7 +78,8 @@ def test_summary_has_contract_keys_and_no_losses(graph_run):
 def test_recorder_waited_for_every_published_message(graph_run):
     """The recorder stopped because it had every message the nodes report they sent (not
     after a quiet period), and every node exited only once its subscribers had acknowledged
-    every message it published."""
+    every message it published, without waiting for a reader that had left (its writer would
+    have waited for the reader's participant lease, 20 s: node_util.READER_LINGER_S)."""
     rec = json.loads((graph_run / 'stats' / 'recorder.json').read_text())
     assert rec['end_reason'] == 'end_time'
     assert rec['missing'] == {}
@@ -88,6 +89,7 @@ def test_recorder_waited_for_every_published_message(graph_run):
     for f in sorted((graph_run / 'stats').glob('*_node.json')):
         st = json.loads(f.read_text())
         assert st['all_acked'] is True, f.name
+        assert st['ack_wait_s'] < 5.0, f.name
         assert st['held_unsent'] == {}, f.name
 
 

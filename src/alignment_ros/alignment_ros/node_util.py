@@ -36,6 +36,13 @@ ACK_TIMEOUT_S = 30.0
 message the transport dropped is resent only at the writer's next heartbeat (Fast DDS: every
 3 s); a process that exits before then takes it with it."""
 
+READER_LINGER_S = 0.3
+"""At shutdown, after its own messages were acknowledged: how long a node's participant stays,
+so that its readers acknowledge what the other nodes sent last, at their writers' next heartbeat
+(every 0.1 s, config/dds/fastdds.xml). A writer notices a reader that left with messages
+unacknowledged only when that participant's lease expires (20 s), and its node waits that long
+at its own end: one default run in three ended 20 s late before the nodes lingered."""
+
 PUBLISH_REFUSED = 'cannot publish data'
 """rmw_fastrtps's error when the DataWriter refuses a write: for a RELIABLE KEEP_ALL writer, its
 history is full of messages a reader has not acknowledged yet and none was within
@@ -67,6 +74,7 @@ class CountingNode(Node):
         self._need: dict[str, Readers] = parse_readers(self.get_parameter('hold_until_matched').value)
         self._held: dict[str, list] = {}
         self._all_acked: bool | None = None   # set by wait_acked()
+        self._ack_wait_s: float | None = None    # and how long it waited (all calls)
         self._next_trim = time.monotonic() + TRIM_INTERVAL_S
         if self._need:
             # held messages go out as soon as their subscribers match, even when nothing else
@@ -149,7 +157,8 @@ class CountingNode(Node):
         """Block until every reliable subscriber has acknowledged every message published so far
         (all publishers together within timeout_s). False if some were not."""
         ok = True
-        deadline = time.monotonic() + timeout_s
+        t0 = time.monotonic()
+        deadline = t0 + timeout_s
         for pub in self._pubs.values():
             left = max(0.0, deadline - time.monotonic())
             try:
@@ -157,12 +166,14 @@ class CountingNode(Node):
             except Exception:   # not supported by every RMW
                 pass
         self._all_acked = ok
+        self._ack_wait_s = (self._ack_wait_s or 0.0) + time.monotonic() - t0
         return ok
 
     def stats(self) -> dict:
         return {'node': self.get_name(), 'published': dict(self.published),
                 'received': dict(self.received), 'rejected': dict(self.rejected),
                 'held_unsent': self.held(), 'all_acked': self._all_acked,
+                'ack_wait_s': None if self._ack_wait_s is None else round(self._ack_wait_s, 3),
                 'publish_waits': dict(self.publish_waits),
                 'publish_wait_s': {t: round(v, 3) for t, v in self.publish_wait_s.items()},
                 'cpu_s': time.process_time()}
@@ -220,7 +231,8 @@ def _refuse(message: str) -> None:
 def run(node_factory, spin: bool = True) -> None:
     """Create the node (invalid, unknown or wrong-typed parameters exit with status 2 and a
     one-line reason), spin until SIGINT/SIGTERM, then send what is held, wait until every
-    subscriber has acknowledged every message (ACK_TIMEOUT_S), write stats and shut down.
+    subscriber has acknowledged every message (ACK_TIMEOUT_S), write stats, let its readers
+    acknowledge the others' last messages (READER_LINGER_S) and shut down.
 
     The EventsExecutor dispatches several times faster than the wait-set executors; it is
     spun from the main thread only (it runs no callbacks from a background thread)."""
@@ -262,4 +274,5 @@ def run(node_factory, spin: bool = True) -> None:
             node.get_logger().warning(
                 f'not every message was acknowledged within {ACK_TIMEOUT_S:.0f} s')
         node.write_stats()
+        time.sleep(READER_LINGER_S)
         shut_down(node, status=1 if failed else 0, signalled=stop['signal'])
