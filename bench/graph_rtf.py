@@ -8,8 +8,10 @@ message), the whole-run RTF including start-up, and lost messages (must be 0).
 Batch: the same scenario in-process; simulation stages, filter alone, and whole pipeline.
 Peer: filterpy's KalmanFilter doing the same 12-state predict + 3-measurement update, so
 the filter's per-step cost is read as a ratio against a well-known implementation.
-Each graph run also gives its start-up (from the command to the first message recorded) and
-each node's CPU time per simulated minute (the nodes' stats).
+Each graph run also gives its start-up (from the command to the first message recorded), each
+node's CPU time per simulated minute (the nodes' stats), the longest any node waited at its end for
+its messages to be acknowledged, and the command's own wall time (with --plots: the summary,
+report.md and the plots too, as scripts/run_graph.sh without --no-plots; what a user waits for).
 """
 from __future__ import annotations
 
@@ -29,22 +31,26 @@ from alignment_core.estimation.filters.kalman import KalmanFilter
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def graph(rtf: float) -> dict:
+def graph(rtf: float, plots: bool = False) -> dict:
     with tempfile.TemporaryDirectory() as d:
         out = Path(d) / 'run'
-        p = subprocess.run([str(ROOT / 'scripts/run_graph.sh'), '--out', str(out), '--no-plots',
+        t0 = time.perf_counter()
+        p = subprocess.run([str(ROOT / 'scripts/run_graph.sh'), '--out', str(out), *([] if plots else ['--no-plots']),
                             '--real-time-factor', str(rtf)], capture_output=True, text=True)
+        command_s = time.perf_counter() - t0
         if p.returncode != 0:
             raise RuntimeError(p.stderr)
         s = json.loads((out / 'summary.json').read_text())
         rec = json.loads((out / 'stats' / 'recorder.json').read_text())
         span = rec.get('receive_span_s') or s['wall_time_s']
-        cpu = {f.stem: json.loads(f.read_text()).get('cpu_s') for f in sorted((out / 'stats').glob('*.json'))
-               if f.stem != 'published'}      # every node's and the recorder's own CPU time
+        stats = {f.stem: json.loads(f.read_text()) for f in sorted((out / 'stats').glob('*.json'))
+                 if f.stem != 'published'}
+        cpu = {n: st.get('cpu_s') for n, st in stats.items()}     # every node's and the recorder's own CPU time
+        ack = max((st.get('ack_wait_s') or 0.0 for st in stats.values()), default=0.0)
         return {'rtf_setting': rtf, 'streaming_rtf': s['sim_time_s'] / span,
                 'whole_run_rtf': s['real_time_factor'], 'lost': s['lost_total'],
                 'messages': sum(s['topics'].values()), 'startup_s': s.get('startup_s'),
-                'sim_time_s': s['sim_time_s'], 'cpu_s': cpu}
+                'sim_time_s': s['sim_time_s'], 'cpu_s': cpu, 'ack_wait_s': ack, 'command_s': command_s}
 
 
 def batch(repeat: int) -> dict:
@@ -93,6 +99,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument('--rtf', type=float, nargs='*', default=[5.0, 10.0, 0.0])
     ap.add_argument('--repeat', type=int, default=3)
+    ap.add_argument('--plots', action='store_true', help='runs with the report and plots, as the main job')
     a = ap.parse_args()
     b = batch(a.repeat)
     print(f"batch pipeline (catapult, 68 s): simulate {b['simulate_s']:.3f} s, filter {b['filter_s']:.3f} s "
@@ -102,10 +109,12 @@ def main() -> None:
     print(f"12-state KF predict+update: ours {k['ours_us']:.1f} us, filterpy {k['filterpy_us']:.1f} us "
           f"-> {k['speed_ratio_vs_filterpy']:.2f}x filterpy's speed (Joseph form in both)")
     for rtf in a.rtf:
-        g = graph(rtf)
+        g = graph(rtf, a.plots)
         print(f"graph at real_time_factor {rtf:g}: streaming RTF {g['streaming_rtf']:.2f}, "
               f"whole run incl. start-up {g['whole_run_rtf']:.2f}, first message {g['startup_s']:.2f} s "
-              f"after the command, {g['messages']} messages, lost {g['lost']}")
+              f"after the command, {g['messages']} messages, lost {g['lost']}; the command took "
+              f"{g['command_s']:.2f} s{' with the report' if a.plots else ''}, its longest wait for "
+              f"acknowledgements at a node's end {g['ack_wait_s']:.2f} s")
         print('  CPU s per simulated minute: ' + ', '.join(
             f"{n} {c * 60.0 / g['sim_time_s']:.1f}" for n, c in g['cpu_s'].items() if c is not None))
 
