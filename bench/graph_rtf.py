@@ -10,8 +10,9 @@ Peer: filterpy's KalmanFilter doing the same 12-state predict + 3-measurement up
 the filter's per-step cost is read as a ratio against a well-known implementation.
 Each graph run also gives its start-up (from the command to the first message recorded), each
 node's CPU time per simulated minute (the nodes' stats), the longest any node waited at its end for
-its messages to be acknowledged, and the command's own wall time (with --plots: the summary,
-report.md and the plots too, as scripts/run_graph.sh without --no-plots; what a user waits for).
+its messages to be acknowledged, and the command's own wall time, the summary included (with
+--plots: report.md and the plots too, as the README's first command makes them; what a user waits
+for).
 """
 from __future__ import annotations
 

@@ -205,16 +205,22 @@ def test_the_motion_figure_drawn_meanwhile_is_the_one_drawn_in_turn(tmp_path):
 
 
 def test_an_error_in_either_process_reaches_the_caller(tmp_path, monkeypatch):
+    """The motion figure's process fails on a /ship/odom that is not CDR: its error is raised;
+    this process's own error comes first, and the other process is not left behind."""
     bag = tmp_path / 'bag'
-    more = _with_motion(bag)
+    write_bag(bag, OLD, True)
+    bad = tmp_path / 'bad'
+    with BagWriter(bad) as w:
+        w.add_topic('/ship/odom', 'nav_msgs/msg/Odometry')
+        w.write('/ship/odom', b'\x00\x01\x00\x00not an odometry', NS)
+    with pytest.raises(RuntimeError, match='the motion figure: '):
+        plots.read_and_draw([bag, bad], tmp_path / 'a')
+    assert sorted(p.name for p in (tmp_path / 'a').glob('*.png')) == ['consistency.png', 'misalignment.png',
+                                                                      'states.png']
 
     def broken(*_):
         raise ValueError('broken figure')
-    figures = plots.FIGURES
-    monkeypatch.setattr(plots, 'FIGURES', tuple((n, t, broken if n == 'motion' else f) for n, t, f in figures))
-    with pytest.raises(RuntimeError, match='the motion figure: ValueError: broken figure'):
-        plots.read_and_draw([bag, more], tmp_path / 'a')
-    monkeypatch.setattr(plots, 'FIGURES', tuple((n, t, broken if n == 'states' else f) for n, t, f in figures))
-    with pytest.raises(ValueError, match='broken figure'):        # this process's own error, the child waited for
-        plots.read_and_draw([bag, more], tmp_path / 'b')
-    assert (tmp_path / 'b' / 'motion.png').exists()
+    monkeypatch.setattr(plots, 'FIGURES', tuple((n, t, broken if n == 'states' else f) for n, t, f in plots.FIGURES))
+    more = _with_motion(tmp_path / 'c' / 'bag')
+    with pytest.raises(ValueError, match='broken figure'):
+        plots.read_and_draw([tmp_path / 'c' / 'bag', more], tmp_path / 'b')

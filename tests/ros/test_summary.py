@@ -110,6 +110,7 @@ def test_nothing_to_score_is_said_not_raised(tmp_path, bag):
     assert s['complete'] is False and s['misalignment_estimate_rad'] is None
     assert s['sim_time_s'] == 0.0
     assert summary.table(s).startswith('misalignment: nothing to score')
+    assert f'nothing to score: {empty}: no /truth/misalignment messages' in s['problems']
 
 
 def test_without_truth_the_last_estimate_and_its_sigma(bag):
@@ -290,3 +291,24 @@ def test_a_bag_is_read_in_one_pass(bag, monkeypatch):
     s = summary.summarise(bag, bag, 1.0, 2.0, 1.0)
     assert s['misalignment_error_rad'] == pytest.approx([1e-3] * 3)
     assert passes == [tuple(sorted(summary.ESTIMATE_TOPICS + summary.TRUTH_TOPICS))]
+
+
+def test_truth_and_estimates_from_two_bags_as_from_one(tmp_path, bag):
+    """A replay scores the estimates of its own bag against the truth of the bag it played: the
+    same numbers as both in one bag, and the counts of both bags."""
+    from alignment_ros.bag import read_bag
+    truth, est = tmp_path / 'truth', tmp_path / 'est'
+    for path, keep in ((truth, {'/truth/misalignment'}), (est, {'/alignment/misalignment', '/alignment/state'})):
+        with BagWriter(path) as w:
+            types = {}
+            for m in read_bag(bag):
+                if m.topic in keep:
+                    if m.topic not in types:
+                        w.add_topic(m.topic, m.type_name)
+                        types[m.topic] = m.type_name
+                    w.write(m.topic, m.data, m.t_ns)
+    one = summary.summarise(bag, bag, 1.0, 2.0, 1.0, PUBLISHED)
+    two = summary.summarise(truth, est, 1.0, 2.0, 1.0, PUBLISHED)
+    for k in summary.SCORE_KEYS + ('topics', 'lost_total', 'complete', 'sim_time_s', 'state_estimate'):
+        assert two[k] == one[k], k
+    assert two['misalignment_error_rad'] == pytest.approx([1e-3] * 3)

@@ -25,6 +25,9 @@ class BagTopics:
         for m in BagReader(self.path).messages(list(self._raw)):
             self._raw[m.topic].append(m)
 
+    def __str__(self) -> str:
+        return str(self.path)
+
     def holds(self, topics: Iterable[str]) -> bool:
         """Whether every one of `topics` was read (present in the bag or not)."""
         return all(t in self._raw for t in topics)

@@ -201,7 +201,7 @@ def _main(a: argparse.Namespace, guard: SignalGuard) -> int:
                        'replayed_from': str(bag)}, out)
     live.close(s if run.interrupted is None else None)
     if not a.no_plots and run.interrupted is None:
-        from . import run_report  # matplotlib, scipy.stats: loaded for the report, not at start-up
+        from . import run_report  # matplotlib: loaded for the report, not at start-up
         run_report.write(out, s, input_bag=bag)
     if run.interrupted is not None:
         print(run.stopped_line(s), file=sys.stderr)

@@ -124,7 +124,7 @@ def truth_from_bag(bag: Bag, until_ns: int | None = None) -> tuple[np.ndarray, n
     d = [m for m in _read(bag, (topics.TRUTH_MISALIGNMENT,))[topics.TRUTH_MISALIGNMENT]
          if until_ns is None or to_ns(m.header.stamp) <= until_ns]
     if not d:
-        raise ValueError(f'{bag}: no {topics.TRUTH_MISALIGNMENT} messages')
+        raise ValueError(f'{_path(bag)}: no {topics.TRUTH_MISALIGNMENT} messages')
     return (np.array([to_ns(m.header.stamp) for m in d], dtype=np.int64),
             np.array([[m.vector.x, m.vector.y, m.vector.z] for m in d]))
 

@@ -3,16 +3,14 @@ misalignment estimate with ±3σ (and truth and error when recorded), the other 
 with 1σ, the NIS against its chi-square bounds with the consistency monitor's verdict, the
 ship's motion and the aircraft's deck velocity, and air data. Each figure is drawn only when
 its topics are in the bags; :func:`draw_all` returns what it drew. :func:`read_and_draw` draws
-the ship-motion figure in a forked process meanwhile: its two 100 Hz streams are most of what a
-run's bag takes to read."""
+the ship-motion figure in a process of its own meanwhile: its two 100 Hz streams are most of
+what a run's bag takes to read."""
 from __future__ import annotations
 
-import logging
-import os
-import pickle
-from collections.abc import Callable, Iterable
+import subprocess
+import sys
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
 
 from .. import topics as topic_names
 from . import air_data as air
@@ -43,33 +41,42 @@ def draw(s: RunSeries, out: Path) -> list[tuple[str, Path]]:
 MOTION = 'motion'
 MOTION_TOPICS = (topic_names.SHIP_ODOM, topic_names.LDV_TWIST)
 """The ship-motion figure's topics (and no other figure's)."""
+MOTION_TIMEOUT_S = 300.0
+"""How long read_and_draw waits for the motion figure's process once its own figures are done."""
 
 
 def read_and_draw(bags: list[Path], out: Path, topics: Iterable[str] | None = None,
                   scenario: dict | None = None) -> tuple[RunSeries, list[tuple[str, Path]]]:
     """`draw_all`'s figures (the same files; `scenario`: the run's, RunSeries.scenario), with
-    the ship-motion figure read and drawn in a forked child while this process reads and draws
-    the others; returns the series of every topic but the motion figure's (the report's text
-    needs none of them) and [(title, png)]."""
+    the ship-motion figure read and drawn by a process of its own (`motion_process.py`, a new
+    interpreter: the launchers that call this run DDS threads, so they do not fork) while this
+    one reads and draws the others; returns the series of every topic but the motion figure's
+    (the report's text needs none of them) and [(title, png)]. An error in either process is
+    raised here (this one's first; the other process is then stopped)."""
     want = tuple(TOPICS if topics is None else topics)
     moving = tuple(t for t in want if t in MOTION_TOPICS)
-    if not moving or not hasattr(os, 'fork'):
+    if not moving:
         s = read(bags, want)
         s.scenario = scenario
         return s, draw(s, out)
     Path(out).mkdir(parents=True, exist_ok=True)
-    entry = next(f for f in FIGURES if f[0] == MOTION)
-    child = _forked(lambda: entry[2](read(bags, moving), Path(out) / f'{MOTION}.png'))
+    child = subprocess.Popen([sys.executable, '-m', 'alignment_ros.plots.motion_process',
+                              str(Path(out) / f'{MOTION}.png'), *(str(b) for b in bags)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         s = read(bags, tuple(t for t in want if t not in MOTION_TOPICS))
         s.scenario = scenario
-        drawn = {name: path for name, _, path in _draw(s, out, skip=MOTION)}
-    except BaseException:
-        child(False)                               # this error, not the child's
-        raise
-    motion_png = child(True)
-    return s, [(title, p) for name, title, _ in FIGURES
-               if (p := motion_png if name == MOTION else drawn.get(name)) is not None]
+        drawn: dict[str, Path | None] = {name: path for name, _, path in _draw(s, out, skip=MOTION)}
+        said, err = child.communicate(timeout=MOTION_TIMEOUT_S)
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+    if child.returncode != 0:
+        lines = err.strip().splitlines()
+        raise RuntimeError(f"the {MOTION} figure: {lines[-1] if lines else f'exit status {child.returncode}'}")
+    drawn[MOTION] = Path(said.strip()) if said.strip() else None
+    return s, [(title, p) for name, title, _ in FIGURES if (p := drawn.get(name)) is not None]
 
 
 def _draw(s: RunSeries, out: Path, skip: str | None = None) -> list[tuple[str, str, Path]]:
@@ -80,32 +87,3 @@ def _draw(s: RunSeries, out: Path, skip: str | None = None) -> list[tuple[str, s
         if name != skip and (path := fn(s, out / f'{name}.png')) is not None:
             drawn.append((name, title, path))
     return drawn
-
-
-def _forked(fn: Callable[[], Any]) -> Callable[[], Any]:
-    """Run fn in a forked child (its bag warnings silenced: this process logs them); return a
-    function that waits for the child and returns fn's result, or (check) raises its error."""
-    r, w = os.pipe()
-    pid = os.fork()
-    if pid == 0:                                   # the child: never returns
-        os.close(r)
-        status = 0
-        try:
-            logging.getLogger('alignment_ros').setLevel(logging.ERROR)
-            payload = pickle.dumps((True, fn()))
-        except BaseException as e:                 # noqa: BLE001 (told to the parent)
-            payload, status = pickle.dumps((False, f'{type(e).__name__}: {e}')), 1
-        with os.fdopen(w, 'wb') as f:
-            f.write(payload)
-        os._exit(status)
-    os.close(w)
-
-    def join(check: bool) -> Any:
-        with os.fdopen(r, 'rb') as f:
-            data = f.read()
-        os.waitpid(pid, 0)
-        ok, value = pickle.loads(data) if data else (False, 'the drawing process died')
-        if not ok and check:
-            raise RuntimeError(f'the {MOTION} figure: {value}')
-        return value
-    return join
