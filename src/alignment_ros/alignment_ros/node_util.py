@@ -41,7 +41,7 @@ READER_LINGER_S = 0.3
 so that its readers acknowledge what the other nodes sent last, at their writers' next heartbeat
 (every 0.1 s, config/dds/fastdds.xml). A writer notices a reader that left with messages
 unacknowledged only when that participant's lease expires (20 s), and its node waits that long
-at its own end: 10 of 41 default runs ended 20 s late before the nodes lingered, none of 23 since."""
+at its own end: 12 of 45 default runs ended 20 s late before the nodes lingered, none of 27 since."""
 
 PUBLISH_REFUSED = 'cannot publish data'
 """rmw_fastrtps's error when the DataWriter refuses a write: for a RELIABLE KEEP_ALL writer, its
