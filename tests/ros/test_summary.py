@@ -59,6 +59,34 @@ def write_bag(path: Path, truths: list, estimates: list, more=None) -> Path:
     return path
 
 
+def attitudes(truth_yaw, estimate, truth_log_delay_ns: int = 0):
+    """write_bag's `more`: /truth/aircraft/odom and /alignment/attitude at 10 Hz from 1.0 s, the
+    k-th truth level and turned truth_yaw(k) rad about z (logged truth_log_delay_ns after its
+    stamp), the estimate turned by yaw and with the attitude variances of estimate(k)."""
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    from nav_msgs.msg import Odometry
+
+    def more(w):
+        w.add_topic('/alignment/attitude', 'geometry_msgs/msg/PoseWithCovarianceStamped')
+        w.add_topic('/truth/aircraft/odom', 'nav_msgs/msg/Odometry')
+        for k in range(11):
+            t = NS + k * NS // 10
+            o = Odometry()
+            o.header.stamp.sec, o.header.stamp.nanosec = t // NS, t % NS
+            half = truth_yaw(k) / 2
+            o.pose.pose.orientation.z, o.pose.pose.orientation.w = math.sin(half), math.cos(half)
+            w.write('/truth/aircraft/odom', serialize_message(o), t + truth_log_delay_ns)
+            yaw, var = estimate(k)
+            a = PoseWithCovarianceStamped()
+            a.header.stamp = o.header.stamp
+            a.pose.pose.orientation.z, a.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+            cov = [0.0] * 36
+            cov[21], cov[28], cov[35] = var
+            a.pose.covariance = cov
+            w.write('/alignment/attitude', serialize_message(a), t)
+    return more
+
+
 PUBLISHED = {'/truth/misalignment': 11, '/alignment/misalignment': 21, '/alignment/state': 21}
 
 
@@ -181,26 +209,9 @@ def test_the_slave_attitude_is_scored_at_its_own_stamp(tmp_path):
     """/alignment/attitude against /truth/aircraft/odom at the same stamp. The estimate is the
     truth turned by theta = (0, 0, 1 mrad) (C_est = C_true (I + [theta x]) with a level truth);
     from C_est = (I - [phi x]) C_true, phi = -theta; the 1-sigma is the covariance's diagonal."""
-    from geometry_msgs.msg import PoseWithCovarianceStamped
-    from nav_msgs.msg import Odometry
-
-    def more(w):
-        w.add_topic('/alignment/attitude', 'geometry_msgs/msg/PoseWithCovarianceStamped')
-        w.add_topic('/truth/aircraft/odom', 'nav_msgs/msg/Odometry')
-        for k in range(11):
-            t = NS + k * NS // 10
-            o = Odometry()
-            o.header.stamp.sec, o.header.stamp.nanosec = t // NS, t % NS
-            o.pose.pose.orientation.w = 1.0
-            w.write('/truth/aircraft/odom', serialize_message(o), t)
-            a = PoseWithCovarianceStamped()
-            a.header.stamp = o.header.stamp
-            a.pose.pose.orientation.z, a.pose.pose.orientation.w = math.sin(5e-4), math.cos(5e-4)
-            cov = [0.0] * 36
-            cov[21], cov[28], cov[35] = 1e-8, 4e-8, 9e-8
-            a.pose.covariance = cov
-            w.write('/alignment/attitude', serialize_message(a), t)
-    path = write_bag(tmp_path / 'bag', [TRUTH] * 11, [TRUTH] * 11, more)
+    def estimate(k):
+        return 1e-3, [1e-8, 4e-8, 9e-8]
+    path = write_bag(tmp_path / 'bag', [TRUTH] * 11, [TRUTH] * 11, attitudes(lambda k: 0.0, estimate))
     s = summary.summarise(path, path, 1.0, 1.0, 1.0)
     assert s['attitude_stamp_s'] == pytest.approx(2.0)
     assert s['attitude_error_rad'] == pytest.approx([0.0, 0.0, -1e-3], abs=1e-12)
@@ -253,23 +264,7 @@ def test_the_truth_attitude_is_found_by_its_header_stamp_not_its_log_time(tmp_pa
     """A bag recorded with receive times (rosbag2's log time) holds /truth/aircraft/odom logged
     5 ms after its stamp: the truth at the attitude's stamp is still the one stamped there (a
     truth of another stamp, turned by 1 rad, would give a 1 rad error)."""
-    from geometry_msgs.msg import PoseWithCovarianceStamped
-    from nav_msgs.msg import Odometry
-
-    def more(w):
-        w.add_topic('/alignment/attitude', 'geometry_msgs/msg/PoseWithCovarianceStamped')
-        w.add_topic('/truth/aircraft/odom', 'nav_msgs/msg/Odometry')
-        for k in range(11):
-            t = NS + k * NS // 10
-            o = Odometry()
-            o.header.stamp.sec, o.header.stamp.nanosec = t // NS, t % NS
-            wrong = k != 10
-            o.pose.pose.orientation.z, o.pose.pose.orientation.w = math.sin(0.5 * wrong), math.cos(0.5 * wrong)
-            w.write('/truth/aircraft/odom', serialize_message(o), t + 5_000_000)
-            a = PoseWithCovarianceStamped()
-            a.header.stamp = o.header.stamp
-            a.pose.pose.orientation.w = 1.0
-            w.write('/alignment/attitude', serialize_message(a), t)
+    more = attitudes(lambda k: 0.0 if k == 10 else 1.0, lambda k: (0.0, [0.0] * 3), truth_log_delay_ns=5_000_000)
     path = write_bag(tmp_path / 'bag', [TRUTH] * 11, [TRUTH] * 11, more)
     s = summary.summarise(path, path, 1.0, 1.0, 1.0)
     assert s['attitude_stamp_s'] == pytest.approx(2.0)

@@ -20,6 +20,7 @@ gives the estimate and its 1-sigma at the filter's last output, truth and error 
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -260,8 +261,11 @@ def _truth_odometry_at(bag: Bag, t_ns: int):
     """The last /truth/aircraft/odom stamped t_ns, or None: the stamps are read from the raw
     bytes (bag.stamp_reader) and only that message is deserialised."""
     found = None
+    readers: dict[str, Callable[[bytes], int] | None] = {}      # by type: looked up once
     for m in read_bag(_path(bag), (topics.TRUTH_AIRCRAFT_ODOM,)):
-        stamp = stamp_reader(m.type_name)
+        if m.type_name not in readers:
+            readers[m.type_name] = stamp_reader(m.type_name)
+        stamp = readers[m.type_name]
         if stamp is not None and stamp(m.data) == t_ns:
             found = m
     return None if found is None else deserialize_message(found.data, msg_class(found.type_name))
