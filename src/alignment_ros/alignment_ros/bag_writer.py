@@ -140,10 +140,12 @@ class _Topic:
 
 
 class _BagFile:
-    """One open ``NAME_k.mcap``: its writer, its channels so far, its size bookkeeping."""
+    """One open ``NAME_k.mcap``: its writer, its channels so far, its size bookkeeping (kept only
+    when the bag splits by size: asking the file its position costs a call per message)."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, sized: bool) -> None:
         self.path = path
+        self.sized = sized
         self.fh = path.open('xb')
         self.writer, self.spilled = _chunked_writer(self.fh)
         self.writer.start(profile='ros2', library=LIBRARY)
@@ -170,6 +172,8 @@ class _BagFile:
 
     def add(self, channel: int, t_ns: int, data: bytes) -> None:
         self.writer.add_message(channel, t_ns, data, t_ns, 0)
+        if not self.sized:
+            return
         tell = self.fh.tell()
         self.pending = 0 if tell != self.tell else self.pending + 31 + len(data)
         self.tell = tell
@@ -349,7 +353,7 @@ class BagWriter:
         name = f'{self.path.name}_{k}.mcap'
         self._meta.relative_file_paths.append(name)
         self._meta.files.append(FileInfo(name, NO_MESSAGE_TIME))
-        return _BagFile(self.path / name)
+        return _BagFile(self.path / name, sized=self.max_size > 0)
 
     def _finish_file(self) -> None:
         out = self._file
