@@ -8,6 +8,13 @@ src/ extracted to a temporary directory), measured alternately with today's in t
 both see the same machine load.
 
     scripts/bench.sh speed [--runs 4] [--seconds 60] [--repeat 3] [--against REV] [--graph-runs 1]
+    scripts/bench.sh speed --publish [--graph-runs 3]     the goals' table, published
+    scripts/bench.sh speed --render                       re-render the last published run
+
+--publish also measures the batch pipeline's peak memory on a 300 s and a 1 h `deck` run
+(bench/batch_memory.py's children), saves the run to bench/results/speed.json and renders its
+table (bench/speed_table.py) into the README's and docs/speed.md's speed blocks, stamped with the
+commit, the date and the machine's load.
 
 Every measurement runs in a child process (`--child PART`, PYTHONPATH pointing at the tree
 measured). Engine: TransferAlignment on a simulated `deck` run (--seconds at 100 Hz); per IMU
@@ -37,6 +44,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import speed_table
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ('alignment_core', 'alignment_experiments')
@@ -137,6 +145,16 @@ def mc_rpm(runs: int, workers: int, scenario: str) -> dict:
     return {'wall_s': wall, 'runs_per_min': 60.0 * runs / wall, 'cpu_s_per_run': (cpu() - c) / runs}
 
 
+def batch_memory() -> dict:
+    """Peak RSS of the batch pipeline on a 300 s and a 1 h `deck` run (bench/batch_memory.py's children)
+    and the line through them."""
+    import batch_memory as bm
+    peaks = {d: bm.run_child(d)['child_maxrss_mib'] for d in (300.0, 3600.0)}
+    per_hour = (peaks[3600.0] - peaks[300.0]) / (3300.0 / 3600.0)
+    return {'peak_300s_mib': peaks[300.0], 'peak_1h_mib': peaks[3600.0], 'per_hour_mib': per_hour,
+            'base_mib': peaks[3600.0] - per_hour, 'import_only_mib': bm.run_child(0.0)['child_maxrss_mib']}
+
+
 def child(part: str, a: argparse.Namespace) -> None:
     if part == 'engine':
         out = engine_us(a.seconds, a.repeat)
@@ -186,11 +204,19 @@ def main() -> None:
                     help="the Monte Carlo's scenarios (300 s each): the papers' deck and the carrier as it is")
     ap.add_argument('--scenario', default='deck_paper', help=argparse.SUPPRESS)
     ap.add_argument('--against', metavar='REV', help='also measure git revision REV (e.g. main) in the same run')
+    ap.add_argument('--publish', action='store_true',
+                    help='also measure the batch memory of a 300 s and a 1 h deck run, save the run to '
+                         'bench/results/speed.json and render its table into the README and docs/speed.md')
+    ap.add_argument('--render', action='store_true', help='only render bench/results/speed.json (no measurement)')
     ap.add_argument('--child', help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.child:
         child(a.child, a)
         return
+    if a.render:
+        speed_table.main()
+        return
+    version, load0 = speed_table.code_version(), os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as d:
         trees: dict[str, str | None] = {'today': None}
         if a.against:
@@ -203,6 +229,7 @@ def main() -> None:
               for name, pp in trees.items()}
         from graph_rtf import graph as graph_run  # bench/graph_rtf.py: run_graph.sh at a real-time factor
         graphs = [graph_run(0.0) for _ in range(a.graph_runs)]
+        memory = batch_memory() if a.publish else None
     print(f'\nengine per IMU step + 100 Hz master match (vm15, deck, {a.seconds:g} s, best of {a.repeat}):')
     for name, e in eng.items():
         print(f'  {name:12s} median {e["median_us"]:7.1f} us  p95 {e["p95_us"]:7.1f} us  ({e["updates"]} updates)')
@@ -223,6 +250,19 @@ def main() -> None:
         print(f'graph, default scenario, --real-time-factor 0: whole-run RTF {g["whole_run_rtf"]:.2f}, first message '
               f'{g["startup_s"]:.2f} s after the command, {g["lost"]} lost; CPU s per simulated minute: '
               + ', '.join(f'{n} {60.0 * c / g["sim_time_s"]:.1f}' for n, c in g['cpu_s'].items() if c is not None))
+    if memory:
+        print(f'batch peak RSS, deck: {memory["peak_1h_mib"]:.0f} MiB for 1 h; ~ {memory["base_mib"]:.0f} MiB + '
+              f'{memory["per_hour_mib"]:.0f} MiB per simulated hour')
+    if a.publish:
+        args = ' '.join(sys.argv[1:])
+        out = {'stamp': {'commit': version, 'date': time.strftime('%Y-%m-%d', time.gmtime()),
+                         'cpus': os.cpu_count(), 'load_start': load0, 'load_end': os.getloadavg()[0],
+                         'command': f'scripts/bench.sh speed {args}'},
+               'engine': eng['today'], 'kf': kf, 'pyins': peer or None, 'graphs': graphs, 'memory': memory,
+               'mc': {sc: {str(w): mc[(sc, 'today', w)] for w in (1, 2)} for sc in a.mc_scenarios}}
+        speed_table.RESULT.parent.mkdir(exist_ok=True)
+        speed_table.RESULT.write_text(json.dumps(out, indent=1) + '\n')
+        speed_table.main()
     if a.against:
         e0 = eng[a.against]['median_us']
         print(f'today vs {a.against}: engine step {e0 / today:.2f}x faster')
