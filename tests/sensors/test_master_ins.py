@@ -120,6 +120,15 @@ def test_exact_discretisation_composes():
     np.testing.assert_allclose(coarse[-1], fine[-1], rtol=1e-9, atol=1e-15)
 
 
+def test_noisy_ins_aligned_at_the_start_starts_without_error():
+    # aligned_ago_s 0: the alignment ends at the first sample, so no error has built up yet (the
+    # random walks had no time to act); it then grows from zero with the noise
+    cfg = MasterConfig(model='schuler', initial='aligned', aligned_ago_s=0.0, arw_dpsh=0.001, vrw_ugpshz=5.0)
+    _, x = run(cfg, 30 * DEG, np.zeros(5), 1.0, 0.01)
+    assert np.all(x[0] == 0.0)
+    assert np.all(np.abs(x[-1]) > 0.0)
+
+
 def test_published_solution_carries_the_error_state():
     sc = scenario.load('catapult_paper', {'duration_s': 2.0, 'master.model': 'schuler', 'master.arw_dpsh': 0.001,
                                     'master.vrw_ugpshz': 5.0})

@@ -175,7 +175,7 @@ class SchulerErrorModel:
             if cfg.aligned_ago_s > 0.0:
                 phi, gam, p = discretise(self.f, self.b, self.qc, cfg.aligned_ago_s)
                 x = gam @ self.u
-        if self.noisy:
+        if self.noisy and p is not None:     # aligned at the run's start (aligned_ago_s 0): no error yet
             x = x + _sqrt_psd(0.5 * (p + p.T)) @ self.rng.standard_normal(5)
         self.x = x
         self.t_ns: int | None = None
