@@ -132,7 +132,7 @@ def estimate(sc: Scenario, inp: AirDataInputs, **overrides) -> AirDataRun:
         while j_ins < len(inp.ins) and inp.ins[j_ins].t <= (t_ns - t0) * 1e-9 + 1e-12:
             est.push_ins(inp.ins[j_ins])
             j_ins += 1
-        if paper and k > 0:
+        if isinstance(est, PaperAirDataFilter) and k > 0:
             s = imu_by_t[t_ns]
             acc = acc[0] + s.accel, acc[1] + s.gyro
             if k % block == 0 or k == len(inp.t_ns) - 1:
@@ -151,7 +151,7 @@ def estimate(sc: Scenario, inp: AirDataInputs, **overrides) -> AirDataRun:
                 ok.append(e.healthy)
                 times.append(t)
             frame = next(frames, None)
-    tight = isinstance(est, TightAirDataFilter)
+    tight = est if isinstance(est, TightAirDataFilter) else None
     return AirDataRun(np.array(times), AIR_DATA_LABELS, np.array(truth_rows), np.array(values), np.array(sigmas),
-                      np.array(ok), dict(est.counts), est.excluded_ports if tight else (),
-                      list(est.detector.detections) if tight else [])
+                      np.array(ok), dict(est.counts), tight.excluded_ports if tight is not None else (),
+                      list(tight.detector.detections) if tight is not None else [])

@@ -79,10 +79,11 @@ class SlaveImuStage:
         tau = (sb.t_ns - self.t0) / 1e9                                  # tau_of, elementwise
         out: list[tuple[AircraftTruth, ImuSample | None]] = [
             (truth, None) for truth in truth_records(sb, self.kin.truth_batch(sb, tau))]
-        first = 0 if self.prev is not None else 1                        # index of the first IMU sample
+        prev = self.prev
+        first = 0 if prev is not None else 1                             # index of the first IMU sample
         if first < len(sb):
-            ends = sb if first else ShipBatch.of([self.prev, *samples])
-            tau_e = tau if first else np.concatenate([[tau_of(self.prev.t_ns, self.t0)], tau])
+            ends = sb if prev is None else ShipBatch.of([prev, *samples])
+            tau_e = tau if prev is None else np.concatenate([[tau_of(prev.t_ns, self.t0)], tau])
             dth, dv = self.kin.increments_batch(ends.slice(slice(0, -1)), ends.slice(slice(1, None)),
                                                 tau_e[:-1], tau_e[1:])
             gyro, accel = self.errors.measure_batch(dth, dv, tau_e[1:] - tau_e[:-1])

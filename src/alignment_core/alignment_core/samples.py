@@ -102,7 +102,8 @@ class ShipBatch:
         return ShipSample(t_ns=int(self.t_ns[k]), p_w=self.p_w[k], q_nb=self.q_nb[k], v_b=self.v_b[k],
                           w_b=self.w_b[k], a_b=self.a_b[k], wdot_b=self.wdot_b[k])
 
-    def slice(self, sl: slice) -> ShipBatch:
+    def slice(self, sl: slice | np.ndarray) -> ShipBatch:
+        """The rows a slice, an index array or a boolean mask selects."""
         return ShipBatch(*(getattr(self, f)[sl] for f in ShipBatch.__slots__))
 
 

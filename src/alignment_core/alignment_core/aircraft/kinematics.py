@@ -97,7 +97,7 @@ class AircraftConfig:
         r = np.asarray(self.lever_arm_m)
         require(np.hypot(r[0], r[1]) <= 200.0 and abs(r[2]) <= 50.0,
                 f"lever_arm_m out of range (|horizontal| <= 200 m, |z| <= 50 m): {self.lever_arm_m}")
-        require(np.all(np.abs(self.misalignment_arcmin) <= 600.0),
+        require(bool(np.all(np.abs(self.misalignment_arcmin) <= 600.0)),
                 f"misalignment_arcmin must be within +-600' per axis: {self.misalignment_arcmin}")
         require(0.0 <= self.misalignment_random_arcmin <= 120.0,
                 f"misalignment_random_arcmin must be in [0, 120], got {self.misalignment_random_arcmin}")
@@ -186,12 +186,13 @@ class AircraftKinematics:
         if self.gear is not None:
             d, v, a = self.gear.displacement(tau)
             r, rd, rdd = r + d, rd + v, rdd + a
-        if not self.vib_motion:
+        vib = self.vib
+        if not self.vib_motion or vib is None:        # (vib_motion implies a vibration model)
             return r, rd, rdd
-        rd = rd + rows_matmul(self.vib.vel(tau), self.c_sa.T)
+        rd = rd + rows_matmul(vib.vel(tau), self.c_sa.T)
         if vib_acc:
-            rdd = rdd + rows_matmul(self.vib.acc(tau), self.c_sa.T)
-        return r + rows_matmul(self.vib.pos(tau), self.c_sa.T), rd, rdd
+            rdd = rdd + rows_matmul(vib.acc(tau), self.c_sa.T)
+        return r + rows_matmul(vib.pos(tau), self.c_sa.T), rd, rdd
 
     def _on_deck(self, c_nb, w, wd, v_n, a_n, p_w, tau, flex=None, vib_acc=True):
         """Aircraft nav quantities on the deck; leading dims (...) of tau, vectors (..., 3);
@@ -356,25 +357,27 @@ class AircraftKinematics:
         return dth, dv
 
     def _flight_state_imu(self, tau) -> tuple[np.ndarray, np.ndarray]:
+        assert self.path is not None                    # called only for an aircraft that flies
         st = self.path.state(tau)
         return self._imu_at(st.c_na, st.w_na, st.v_n, st.a_n, st.lat, st.h)
 
     def _flight_increments(self, tau0: np.ndarray, tau1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Increments over flight intervals (K,): 3-point Gauss-Legendre on each piece between
         the flight's breakpoints (segment and transition boundaries), summed per interval."""
+        assert self.path is not None
         bp = self.path.breakpoints
         lo, hi = np.searchsorted(bp, tau0, side='right'), np.searchsorted(bp, tau1, side='left')
-        a, b, owner = [tau0], [tau1], [np.arange(len(tau0))]
+        starts, ends, owners = [tau0], [tau1], [np.arange(len(tau0))]
         split = np.flatnonzero(hi > lo)
         if len(split):
-            a, b, owner = [tau0.copy()], [tau1.copy()], [np.arange(len(tau0))]
+            starts, ends, owners = [tau0.copy()], [tau1.copy()], [np.arange(len(tau0))]
             for k in split:
                 cuts = np.concatenate([[tau0[k]], bp[lo[k]:hi[k]], [tau1[k]]])
-                b[0][k] = cuts[1]
-                a.append(cuts[1:-1])
-                b.append(cuts[2:])
-                owner.append(np.full(len(cuts) - 2, k))
-        a, b, owner = np.concatenate(a), np.concatenate(b), np.concatenate(owner)
+                ends[0][k] = cuts[1]
+                starts.append(cuts[1:-1])
+                ends.append(cuts[2:])
+                owners.append(np.full(len(cuts) - 2, k))
+        a, b, owner = np.concatenate(starts), np.concatenate(ends), np.concatenate(owners)
         hp = b - a
         nodes = a[:, None] + GL_NODES[None, :] * hp[:, None]
         w_ib, f = self._flight_state_imu(nodes)

@@ -139,13 +139,13 @@ class ImuErrorModel:
             self.scale = m                                                 # (I + S) gyro, accel
         self.gm_sigma = np.r_[np.full(3, cfg.gyro_bias_instability_dph * DPH),
                               np.full(3, cfg.accel_bias_instability_ug * UG)]
-        self.gm = None
+        self.gm: np.ndarray | None = None
         if np.any(self.gm_sigma > 0.0):
             self.gm_rng = stage_rng(seed, 'slave_imu_gm')
             self.gm = self.gm_rng.standard_normal(6) * self.gm_sigma       # stationary start
         self.rw_sigma = np.r_[np.full(3, cfg.gyro_bias_rw_dphps * DPH),
                               np.full(3, cfg.accel_bias_rw_ugps * UG)]
-        self.rw = None
+        self.rw: np.ndarray | None = None
         if np.any(self.rw_sigma > 0.0):
             self.rw_rng = stage_rng(seed, 'slave_imu_rrw')
             self.rw = np.zeros(6)                                          # starts at zero
@@ -166,6 +166,7 @@ class ImuErrorModel:
         q = np.sqrt(1.0 - phi**2)
         out = np.empty((len(h), 6))
         b = self.gm
+        assert b is not None                            # called only with the bias instability on
         for k in range(len(h)):
             out[k] = b
             b = phi[k] * b + q[k] * self.gm_sigma * n[k]
@@ -175,6 +176,7 @@ class ImuErrorModel:
     def _rw_batch(self, h: np.ndarray) -> np.ndarray:
         """Bias random-walk state over each interval (K, 6): b_k+1 = b_k + sigma sqrt(h) n."""
         steps = self.rw_rng.standard_normal((len(h), 6)) * self.rw_sigma * np.sqrt(h)[:, None]
+        assert self.rw is not None                      # called only with the bias random walk on
         walk = np.cumsum(np.vstack([self.rw, steps]), axis=0)
         self.rw = walk[-1].copy()
         return walk[:-1]

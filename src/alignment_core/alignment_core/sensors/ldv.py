@@ -133,7 +133,7 @@ class LdvModel:
         u = self.drop_rng.random(len(t_ns))
         out = np.empty(len(t_ns), dtype=bool)
         for k, t in enumerate(t_ns):
-            if self.in_dropout is None:
+            if self.in_dropout is None or self.last_t is None:     # the first sample: both unset
                 p = cfg.dropout_rate_hz * cfg.dropout_mean_s
                 self.in_dropout = bool(u[k] < p / (1.0 + p))
             else:
@@ -246,7 +246,7 @@ class LdvStage:
         idx = np.flatnonzero(self.timing.due_mask(sb.t_ns))
         new: list[LdvSample] = []
         if len(idx):
-            sel = [aircraft[i] for i in idx]
+            sel = [aircraft[int(i)] for i in idx]
             new = self._stamped(self.model.measure_batch(
                 sb.slice(idx), np.array([a.p_w for a in sel]), np.array([a.q_nb for a in sel]),
                 np.array([a.v_b for a in sel]), np.array([a.w_b for a in sel])))

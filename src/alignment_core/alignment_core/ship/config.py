@@ -31,7 +31,8 @@ def _paper_amplitudes() -> dict[int, tuple[float, float, float]]:
     out = dict(PAPER_TABLE3_DEG)
     for ss, ref in ((1, 3), (2, 3), (8, 7), (9, 7)):
         k = BALES_HS_M[ss] / BALES_HS_M[ref]
-        out[ss] = tuple(a * k for a in PAPER_TABLE3_DEG[ref])
+        roll, pitch, yaw = PAPER_TABLE3_DEG[ref]
+        out[ss] = (roll * k, pitch * k, yaw * k)
     return dict(sorted(out.items()))
 
 

@@ -16,6 +16,8 @@ acceleration by its exact derivative, and the nav-frame acceleration of the grou
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -27,6 +29,9 @@ from alignment_core.ship.config import BALES_HS_M, PAPER_AMPLITUDE_DEG, PAPER_PE
 from alignment_core.ship.track import make_track
 from alignment_core.units import DEG, KNOT
 from alignment_core.validation import ConfigError
+
+if TYPE_CHECKING:
+    from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack
 
 
 class PaperShipMotion:
@@ -56,7 +61,7 @@ class PaperShipMotion:
         self.lat0 = cfg.lat_deg * DEG
         self.lon0 = cfg.lon_deg * DEG
         self.plane = earth.TangentPlane(self.lat0, self.lon0, 0.0)
-        self.track = None
+        self.track: ManoeuvringTrack | None = None
         if cfg.course_keeping == 'mmg':
             self.track = make_track(cfg, self._box_waves(cfg, seed, s))
 
@@ -127,6 +132,7 @@ class PaperShipMotion:
     def _samples_mmg(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int) -> list[ShipSample]:
         """The paper's sinusoids about the MMG track: yaw and roll of the track added to the
         sinusoids, position and velocity of the track plus heave."""
+        assert self.track is not None                   # course_keeping 'mmg'
         lf = self.track.kinematics(t)
         e, ed, edd = self.euler(t)
         e[:, 2] += heading_to_yaw(lf['psi']) - self.yaw0

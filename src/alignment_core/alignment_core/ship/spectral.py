@@ -42,7 +42,7 @@ from alignment_core.rng import stage_rng
 from alignment_core.samples import ShipSample
 from alignment_core.ship import rao, sea_state, wave_spectrum
 from alignment_core.ship.config import ShipConfig
-from alignment_core.ship.manoeuvring.course_keeping import quintic_coefficients, quintic_values
+from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack, quintic_coefficients, quintic_values
 from alignment_core.ship.track import StraightCourse
 from alignment_core.units import DEG, KNOT
 
@@ -211,6 +211,8 @@ class WaveFrequencyOnTrack:
         low-frequency kinematics `lf` (default: the track's kinematics at t)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if lf is None:
+            if self.track is None:
+                raise ValueError('evaluate: no track was given, so its kinematics must be')
             lf = self.track.kinematics(t)
         n = len(t)
         e, nn = lf['east'], lf['north']
@@ -244,6 +246,7 @@ class WaveFrequencyOnTrack:
         if self.n_sets == 1:
             out[:, 0:6], out[:, 6:12], out[:, 12:18] = val[:, :6], d1[:, :6], d2[:, :6]
             return out
+        assert self.span is not None                    # n_sets > 1 comes with a span
         p0, p1 = self.span
         u = (lf['psi'] - p0) / (p1 - p0)
         s, s1, s2 = _smoothstep(u, lf['psi_dot'] / (p1 - p0), lf['psi_ddot'] / (p1 - p0))
@@ -284,7 +287,8 @@ class SpectralShipMotion:
             rao_fn = rao.make(cfg.rao_source, rao.CarrierParams(roll_period_s=cfg.roll_period_s,
                                                                 roll_zeta=cfg.roll_zeta))
         self.rao = rao_fn
-        self.track = None
+        self.track: ManoeuvringTrack | None = None
+        self.wf: WaveFrequencyOnTrack | WaveFrequencyMotion
         if cfg.course_keeping == 'mmg':
             from alignment_core.ship.track import make_track
             self.track = make_track(cfg)
@@ -337,8 +341,10 @@ class SpectralShipMotion:
         heading psi(t) (ROS yaw), so the ENU displacement d = R(psi) x has the velocity
         R x' + psi' R J x and the acceleration R x'' + 2 psi' R J x' + psi'' R J x - psi'^2 R x
         (J: +90 deg rotation); roll of the track added to the wave roll."""
-        lf = self.track.kinematics(t)
-        x = self.wf.at(t)
+        track, wf = self.track, self.wf
+        assert track is not None and isinstance(wf, WaveFrequencyOnTrack)     # course_keeping 'mmg'
+        lf = track.kinematics(t)
+        x = wf.at(t)
         n = len(t)
         psi = heading_to_yaw(lf['psi'])
         pd, pdd = -lf['psi_dot'], -lf['psi_ddot']

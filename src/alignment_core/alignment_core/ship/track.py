@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -11,8 +12,11 @@ from alignment_core.geometry.euler import heading_to_yaw
 from alignment_core.ship.config import ShipConfig
 from alignment_core.units import DEG, KNOT
 
+if TYPE_CHECKING:
+    from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack
 
-def make_track(cfg: ShipConfig, external=None):
+
+def make_track(cfg: ShipConfig, external=None) -> ManoeuvringTrack:
     """The low-frequency MMG track of `course_keeping: mmg` (course_keeping.ManoeuvringTrack),
     with optional external forces `external(t, north, east, psi) -> (X, Y, N, K)`."""
     from alignment_core.ship.manoeuvring import mmg

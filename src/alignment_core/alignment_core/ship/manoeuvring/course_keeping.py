@@ -188,7 +188,7 @@ class ManoeuvringTrack:
         inc = h * np.sum(q * e_dot * _GL_WU, axis=1)
         self._lon_knots.extend((self._lon_knots[self._lon_knots.n - 1][0] + np.cumsum(inc))[:, None])
 
-    def _channels(self, y, f):
+    def _channels(self, y: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(value, first, second derivative), each (n, 4), of north, east, psi, phi (north
         and east relative to the t = 0 position)."""
         psi, u, v, r = y[:, I_PSI], y[:, I_U], y[:, I_V], y[:, I_R]
