@@ -12,7 +12,7 @@ Each graph run also gives its start-up (from the command to the first message re
 node's CPU time per simulated minute (the nodes' stats), the longest any node waited at its end for
 its messages to be acknowledged, and the command's own wall time, the summary included (with
 --plots: report.md and the plots too, as the README's first command makes them; what a user waits
-for).
+for), and whether its scored estimate is, bit for bit, the batch pipeline's on the same scenario.
 """
 from __future__ import annotations
 
@@ -48,10 +48,21 @@ def graph(rtf: float, plots: bool = False) -> dict:
                  if f.stem != 'published'}
         cpu = {n: st.get('cpu_s') for n, st in stats.items()}     # every node's and the recorder's own CPU time
         ack = max((st.get('ack_wait_s') or 0.0 for st in stats.values()), default=0.0)
-        return {'rtf_setting': rtf, 'streaming_rtf': s['sim_time_s'] / span,
+        same = same_as_batch(out, s)
+        return {'same_estimate': same, 'rtf_setting': rtf, 'streaming_rtf': s['sim_time_s'] / span,
                 'whole_run_rtf': s['real_time_factor'], 'lost': s['lost_total'],
                 'messages': sum(s['topics'].values()), 'startup_s': s.get('startup_s'),
                 'sim_time_s': s['sim_time_s'], 'cpu_s': cpu, 'ack_wait_s': ack, 'command_s': command_s}
+
+
+def same_as_batch(out: Path, s: dict) -> bool:
+    """Whether the run's scored estimate (summary.json) is, bit for bit, the batch pipeline's
+    estimate at the same instant on the run's own resolved scenario."""
+    sc = scenario.load(str(out / 'scenario.yaml'))
+    est = pipeline.run(sc, keep_truth=False).estimates
+    t_b = np.array([e.t_ns for e in est])
+    i = int(np.searchsorted(t_b, round(s['scored_at_s'] * 1e9), side='right')) - 1
+    return i >= 0 and s['misalignment_estimate_rad'] == est[i].misalignment.tolist()
 
 
 def batch(repeat: int) -> dict:
@@ -115,7 +126,8 @@ def main() -> None:
               f"whole run incl. start-up {g['whole_run_rtf']:.2f}, first message {g['startup_s']:.2f} s "
               f"after the command, {g['messages']} messages, lost {g['lost']}; the command took "
               f"{g['command_s']:.2f} s{' with the report' if a.plots else ''}, its longest wait for "
-              f"acknowledgements at a node's end {g['ack_wait_s']:.2f} s")
+              f"acknowledgements at a node's end {g['ack_wait_s']:.2f} s; the scored estimate "
+              f"{'equals' if g['same_estimate'] else 'DIFFERS FROM'} the batch pipeline's")
         print('  CPU s per simulated minute: ' + ', '.join(
             f"{n} {c * 60.0 / g['sim_time_s']:.1f}" for n, c in g['cpu_s'].items() if c is not None))
 

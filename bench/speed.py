@@ -248,7 +248,9 @@ def main() -> None:
               f'-> 100 runs in {100 / r["runs_per_min"]:5.1f} min; {r["cpu_s_per_run"]:5.1f} CPU s per run')
     for g in graphs:
         print(f'graph, default scenario, --real-time-factor 0: whole-run RTF {g["whole_run_rtf"]:.2f}, first message '
-              f'{g["startup_s"]:.2f} s after the command, {g["lost"]} lost; CPU s per simulated minute: '
+              f'{g["startup_s"]:.2f} s after the command, {g["lost"]} lost, the scored estimate '
+              f'{"equal to" if g["same_estimate"] else "DIFFERENT FROM"} the batch pipeline\'s; '
+              'CPU s per simulated minute: '
               + ', '.join(f'{n} {60.0 * c / g["sim_time_s"]:.1f}' for n, c in g['cpu_s'].items() if c is not None))
     if memory:
         print(f'batch peak RSS, deck: {memory["peak_1h_mib"]:.0f} MiB for 1 h; ~ {memory["base_mib"]:.0f} MiB + '

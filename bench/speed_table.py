@@ -76,6 +76,10 @@ def rows(r: dict[str, Any]) -> list[tuple[str, str, str, str]]:
                     _list(start, lambda v: f'{v:.2f} s'), _met(max(start) < STARTUP_S)))
         out.append(('Graph: messages lost', '0', _list([float(x) for x in lost], lambda v: f'{v:.0f}'),
                     _met(max(lost) == 0)))
+        if all('same_estimate' in g for g in graphs):
+            same = [bool(g['same_estimate']) for g in graphs]
+            out.append(("Graph: the scored estimate, against the batch pipeline's on the same scenario", 'bit for bit',
+                        ', '.join('equal' if x else 'different' for x in same), _met(all(same))))
     mem = r.get('memory')
     if mem:
         out.append(('Batch pipeline, peak RSS of a 1 h `deck` run', 'reported and bounded',

@@ -66,3 +66,13 @@ def test_the_block_is_replaced_in_place_and_stamped(tmp_path):
     assert 'old' not in text
     assert 'at commit `abc1234`, 2026-12-03, 2 CPUs, load average 0.5 at the start and 1.0 at the end' in text
     assert 'filter 3.0, 3.0' in text and 'ship' not in text.split('CPU seconds')[1].split('\n')[0]
+
+
+def test_the_graph_estimate_row_needs_every_run_equal_to_the_batch():
+    runs = [graph(9.0, 1.6), graph(9.0, 1.6)]
+    runs[0]['same_estimate'], runs[1]['same_estimate'] = True, False
+    v = verdicts(run(graphs=runs))
+    assert v["Graph: the scored estimate, against the batch pipeline's on the same scenario"] == 'not met'
+    runs[1]['same_estimate'] = True
+    assert verdicts(run(graphs=runs))["Graph: the scored estimate, against the batch pipeline's on the same scenario"] \
+        == 'met'
