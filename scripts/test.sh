@@ -6,5 +6,5 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 . "$ROOT/scripts/env.sh"
 cd "$ROOT"
 ruff check src tests bench experiments
-mypy                     # geometry/, navigation/, estimation/ (mypy.ini)
+mypy                     # every package (mypy.ini)
 exec python -m pytest -q tests "$@"

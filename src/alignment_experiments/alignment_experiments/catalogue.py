@@ -60,7 +60,7 @@ class Experiment:
         """Every (cell, seed) run; seed numbers are first_seed .. first_seed + seeds - 1 in every cell,
         so cells are compared on the same random draws."""
         n = self.seeds if seeds is None else seeds
-        out = []
+        out: list[RunSpec] = []
         for cell, i in itertools.product(self.cells, range(n)):
             out.append(RunSpec(index=len(out), cell=cell.label, scenario=self.scenario,
                                overrides=self.base + cell.overrides, seed=first_seed + i,
@@ -87,8 +87,10 @@ def grid(**axes: list[tuple[object, dict[str, object]]]) -> tuple[Cell, ...]:
     return tuple(cells)
 
 
-def _deg(*v: float | None) -> tuple[float | None, ...]:
-    return tuple(None if x is None else x * DEG_TO_ARCMIN for x in v)
+def _deg(x: float | None, y: float | None, z: float | None) -> tuple[float | None, float | None, float | None]:
+    """Three per-axis degrees (None: not given) in arcmin."""
+    return (None if x is None else x * DEG_TO_ARCMIN, None if y is None else y * DEG_TO_ARCMIN,
+            None if z is None else z * DEG_TO_ARCMIN)
 
 
 ALL_FILTERS = ('kf', 'stf', 'stf_multiple', 'fading_tested', 'carlson', 'ud', 'combined')

@@ -7,8 +7,8 @@ import time
 from pathlib import Path
 
 from . import air_data_runs, monte_carlo, report, results
-from .air_data_catalogue import AIR_DATA_EXPERIMENTS
-from .catalogue import CATALOGUE
+from .air_data_catalogue import AIR_DATA_EXPERIMENTS, AirDataExperiment
+from .catalogue import CATALOGUE, Experiment
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -24,7 +24,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument('--out', type=Path, default=None, help='output directory (default runs/experiments/NAME)')
     a = ap.parse_args(argv)
     if a.list or not a.name:
-        for e in [*CATALOGUE.experiments.values(), *AIR_DATA_EXPERIMENTS.values()]:
+        listed: list[Experiment | AirDataExperiment] = [*CATALOGUE.experiments.values(),
+                                                        *AIR_DATA_EXPERIMENTS.values()]
+        for e in listed:
             print(f'{e.name:18s} {e.title}')
         return 0
     if a.seeds is not None and a.seeds < 1:

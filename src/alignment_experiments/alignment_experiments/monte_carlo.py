@@ -17,6 +17,7 @@ import multiprocessing
 import os
 import sys
 import time
+from collections.abc import Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
@@ -25,6 +26,7 @@ from scipy.spatial.transform import Rotation
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
+from alignment_core.estimation.outputs import Estimate
 from alignment_core.geometry.rotations import relative_rotvec_batch
 from alignment_core.units import ARCMIN
 
@@ -82,7 +84,8 @@ def truth_indices(truth_t_ns: np.ndarray, t_ns: np.ndarray) -> np.ndarray:
     return np.minimum(np.searchsorted(truth_t_ns, t_ns), len(truth_t_ns) - 1)
 
 
-def misalignment_errors(est: list, truth_t_ns: np.ndarray, rel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def misalignment_errors(est: Sequence[Estimate], truth_t_ns: np.ndarray,
+                        rel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(K, 3) misalignment error (rad) of each estimate against the truth `rel` (K_truth, 3), taken
     at the estimate's time of validity (its stamp less the master latency the filter is told:
     the relative attitude it estimated, docs/carrier.md), and its (K, 3) 1-sigma."""
@@ -91,7 +94,7 @@ def misalignment_errors(est: list, truth_t_ns: np.ndarray, rel: np.ndarray) -> t
     return err, np.array([e.misalignment_sigma for e in est]).reshape(-1, 3)
 
 
-def attitude_errors(est: list, q_true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def attitude_errors(est: Sequence[Estimate], q_true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(K, 3) slave attitude error phi (nav frame, C_est = (I - [phi x]) C_true) and its 1-sigma
     from the filter's attitude covariance, at each estimate."""
     q_est = np.array([e.q_nb for e in est]).reshape(-1, 4)

@@ -4,6 +4,7 @@ variable, per-cell RMS bars, average NEES vs time with its chi-square bounds).""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import SupportsFloat
 
 import numpy as np
 
@@ -88,10 +89,12 @@ def _plots(out: Path, exp: Experiment, cells: dict[str, list[RunOutcome]]) -> li
     if exp.sweep:
         groups: dict[tuple, list[tuple[float, np.ndarray]]] = {}
         for runs in cells.values():
-            vals = dict(runs[0].spec.values)
+            swept = dict(runs[0].spec.values)[exp.sweep]
+            if not isinstance(swept, (SupportsFloat, str)):
+                raise TypeError(f'{exp.name}: the swept column {exp.sweep} is not a number: {swept!r}')
             key = tuple((k, v) for k, v in runs[0].spec.values if k != exp.sweep)
             groups.setdefault(key, []).append(
-                (float(vals[exp.sweep]), np.sqrt(np.nanmean([o.err ** 2 for o in runs], axis=0))))
+                (float(swept), np.sqrt(np.nanmean([o.err ** 2 for o in runs], axis=0))))
         fig, axs = plt.subplots(1, 3, figsize=(13, 3.8), squeeze=False)
         for key, pts in groups.items():
             pts.sort(key=lambda p: p[0])

@@ -115,12 +115,13 @@ def write(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: int, fi
             'first_seed': first_seed, 'runs': len(outcomes),
             'code_version': version if version is not None else code_version()}
     (out / 'meta.json').write_text(json.dumps(meta, indent=1, default=str) + '\n')
-    arrays = {}
+    arrays: dict[str, np.ndarray] = {}
     for o in outcomes:
         arrays[f'run{o.spec.index}_t_s'] = o.t_s
         arrays[f'run{o.spec.index}_err_arcmin'] = o.err_t
         arrays[f'run{o.spec.index}_sigma_arcmin'] = o.sigma_t
-    np.savez_compressed(out / 'series.npz', **arrays)
+    # allow_pickle: numpy's default, named so that no run{i}_* key could be taken for that flag
+    np.savez_compressed(out / 'series.npz', allow_pickle=True, **arrays)
     (out / 'timing.json').write_text(json.dumps({
         'wall_s': wall_s, 'workers': workers, 'runs': len(outcomes),
         'runs_per_minute': 60.0 * len(outcomes) / wall_s if wall_s > 0 else None,

@@ -18,7 +18,8 @@ that read in log-time order use the chunk index and still get it in order) and c
 from __future__ import annotations
 
 import heapq
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
+from typing import cast
 
 ENTRY_OVERHEAD_B = 160
 """Python memory of one buffered entry besides its payload (the heap tuple, two ints, the bytes
@@ -50,7 +51,9 @@ class ReorderBuffer:
 
     def _watermark(self) -> int | None:
         latest = self._latest.values()
-        return None if None in latest else min(latest, default=None)
+        if None in latest:
+            return None
+        return min(cast(Iterable[int], latest), default=None)   # no None left: every stream has sent
 
     def push(self, stream: object, t_ns: int, data: bytes) -> None:
         """Buffer one message (then take what it released with :meth:`release`)."""

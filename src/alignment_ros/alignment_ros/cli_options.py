@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 import copy
-from typing import Any
+from typing import Any, TypeVar
 
 from rclpy.duration import Duration
 from rclpy.qos import (
@@ -69,7 +69,10 @@ def unsigned_int(text: str) -> int:
     return value
 
 
-def number(text: str, kind: type[float] | type[int]) -> float:
+NumberT = TypeVar('NumberT', int, float)
+
+
+def number(text: str, kind: type[NumberT]) -> NumberT:
     """`text` as a float or int, or ros2bag's type error ("X is not the valid type (float)")."""
     try:
         return kind(text)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from typing import SupportsFloat
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -79,7 +80,8 @@ def msgs_to_ship(odom: Odometry, acc: AccelStamped | None = None) -> ShipSample:
                       wdot_b=zero if acc is None else _a3(acc.accel.angular))
 
 
-def navsatfix(t_ns: int, frame: str, lat_rad: float, lon_rad: float, h: float) -> NavSatFix:
+def navsatfix(t_ns: int, frame: str, lat_rad: SupportsFloat, lon_rad: SupportsFloat, h: SupportsFloat) -> NavSatFix:
+    """A fix at geodetic lat, lon (rad) and h (m): floats, or numpy scalars (0-d arrays of to_geodetic)."""
     m = NavSatFix()
     m.header.stamp = stamp(t_ns)
     m.header.frame_id = frame

@@ -190,11 +190,12 @@ class Printer:
         if self.done:
             return
         sub = msg
-        for name in self.field or ():
+        field = self.field or []
+        for name in field:
             try:
                 sub = getattr(sub, name)
             except AttributeError as exc:
-                raise EchoError(f"Invalid field '{'.'.join(self.field)}': {exc}") from None
+                raise EchoError(f"Invalid field '{'.'.join(field)}': {exc}") from None
         if self.filter_code is not None and not eval(self.filter_code, {}, {'m': sub}):  # noqa: S307
             return
         self.printed += 1
@@ -292,10 +293,13 @@ def run(args: argparse.Namespace, ros_argv: list[str]) -> int:
             node.create_timer(args.timeout, lambda: stop.update(timeout=True))
         events = None if args.no_lost_messages else SubscriptionEventCallbacks(
             message_lost=_message_lost)
+        # printer takes (message, MessageInfo): rclpy's Subscription accepts that form, but the hint of
+        # Node.create_subscription in this rclpy names the one-argument form only
         try:
-            node.create_subscription(cls, topic, printer, qos, event_callbacks=events, raw=args.raw)
+            node.create_subscription(cls, topic, printer, qos,  # type: ignore[arg-type]
+                                     event_callbacks=events, raw=args.raw)
         except UnsupportedEventTypeError:
-            node.create_subscription(cls, topic, printer, qos, raw=args.raw)
+            node.create_subscription(cls, topic, printer, qos, raw=args.raw)  # type: ignore[arg-type]
         while not (printer.done or stop['signal'] or stop['timeout']):
             executor.spin_once(timeout_sec=0.1)
     except BaseException as exc:

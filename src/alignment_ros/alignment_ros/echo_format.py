@@ -159,9 +159,13 @@ def _csv_cells(value: Any, field_type: Any, truncate_length: int | None, no_arr:
         return cells
     if isinstance(value, str) and no_str:
         return [_string_length(value)]
-    if isinstance(value, (bytes, str)):
+    if isinstance(value, bytes):
         if truncate_length is not None and len(value) > truncate_length:
-            value = value[:truncate_length] + (b'...' if isinstance(value, bytes) else '...')
+            value = value[:truncate_length] + b'...'
+        return [str(value)]
+    if isinstance(value, str):
+        if truncate_length is not None and len(value) > truncate_length:
+            value = value[:truncate_length] + '...'
         return [str(value)]
     if isinstance(value, (*_SCALARS, numpy.number, numpy.bool_)):
         return [str(value)]

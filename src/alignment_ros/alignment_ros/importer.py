@@ -83,18 +83,18 @@ def write_bag(log: recording.RecordedLog, origin: tuple[float, float], out: Path
             w.add_topic(t, topics.TOPIC_TYPES[t])
         for t_ns in recording.stamps_ns(log):
             w.write(topics.CLOCK, serialize_message(Clock(clock=convert.stamp(int(t_ns)))), int(t_ns))
-        for s in recording.master_samples(log, plane):
-            w.write(topics.MASTER_ODOM, serialize_message(convert.master_to_msg(s)), s.t_ns)
+        for master in recording.master_samples(log, plane):
+            w.write(topics.MASTER_ODOM, serialize_message(convert.master_to_msg(master)), master.t_ns)
         m = log.master
         for k, t_ns in enumerate(m.t_ns):
             fix = convert.navsatfix(int(t_ns), topics.FRAME_SHIP, m.lat[k], m.lon[k], m.h[k])
             w.write(topics.MASTER_FIX, serialize_message(fix), int(t_ns))
-        for s in recording.imu_samples(log):       # covariances 0: unknown (REP-145)
-            w.write(topics.AIRCRAFT_IMU, serialize_message(convert.imu_to_msg(s, 0.0, 0.0)), s.t_ns)
+        for imu in recording.imu_samples(log):       # covariances 0: unknown (REP-145)
+            w.write(topics.AIRCRAFT_IMU, serialize_message(convert.imu_to_msg(imu, 0.0, 0.0)), imu.t_ns)
         if log.ldv is not None:
             w.add_topic(topics.LDV_TWIST, topics.TOPIC_TYPES[topics.LDV_TWIST])
-            for s in recording.ldv_samples(log.ldv):
-                w.write(topics.LDV_TWIST, serialize_message(convert.ldv_to_msg(s)), s.t_ns)
+            for ldv in recording.ldv_samples(log.ldv):
+                w.write(topics.LDV_TWIST, serialize_message(convert.ldv_to_msg(ldv)), ldv.t_ns)
         if log.doppler is not None:
             w.add_topic(topics.DOPPLER_TWIST, topics.TOPIC_TYPES[topics.DOPPLER_TWIST])
             for d in recording.doppler_samples(log.doppler):

@@ -137,7 +137,9 @@ def first_field_type(type_name: str) -> str | None:
         parts = line.split()
         if len(parts) < 2 or '=' in parts[1] or (len(parts) > 2 and parts[2].startswith('=')):
             continue  # a constant: TYPE NAME=VALUE
-        t = re.match(r'[a-zA-Z0-9_/]*', parts[0]).group(0)  # without [N] or <=N
+        base_type = re.match(r'[a-zA-Z0-9_/]*', parts[0])
+        assert base_type is not None  # '*' matches the empty string too: re.match cannot fail
+        t = base_type.group(0)  # without [N] or <=N
         return t if '/' in t or t in PRIMITIVES else f'{package}/{t}'
     return None
 

@@ -7,16 +7,18 @@ from __future__ import annotations
 import json
 import sys
 import time
-from collections import Counter
+from collections import Counter, defaultdict
 from pathlib import Path
 
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.executors import Executor
 from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 
 from alignment_core.validation import ConfigError
 
@@ -57,20 +59,24 @@ the writer back, so only a reader that is alive and takes nothing for this long 
 class CountingNode(Node):
     """A node that counts what it publishes and receives and can write them to a JSON file."""
 
+    executor_ref: Executor
+    """The executor that spins the node (an EventsExecutor): set by run() before it spins or runs
+    the node (a node that runs its own loop, the ship, spins it from there)."""
+
     def __init__(self, name: str) -> None:
         super().__init__(name)
         self.published: Counter = Counter()
         self.received: Counter = Counter()
         self.rejected: Counter = Counter()
         self.publish_waits: Counter = Counter()      # publishes refused (writer history full), retried
-        self.publish_wait_s: Counter = Counter()     # wall seconds spent waiting, per topic
+        self.publish_wait_s: defaultdict[str, float] = defaultdict(float)  # wall seconds spent waiting, per topic
         self.declare_parameter('stats_path', '', ParameterDescriptor(
             description='write publish/receive counts here (JSON) at shutdown; empty: do not'))
         self.declare_parameter('hold_until_matched', [''], ParameterDescriptor(
             description="'topic:count' or 'topic:node+node...' items: hold this node's messages on "
                         "topic until its publisher has matched count subscriptions, or a "
                         "subscription of each node named (no message into the void)"))
-        self._pubs: dict[str, object] = {}
+        self._pubs: dict[str, Publisher] = {}
         self._need: dict[str, Readers] = parse_readers(self.get_parameter('hold_until_matched').value)
         self._held: dict[str, list] = {}
         self._all_acked: bool | None = None   # set by wait_acked()
@@ -89,7 +95,7 @@ class CountingNode(Node):
             release_free_heap()
             self._next_trim = now + TRIM_INTERVAL_S
 
-    def stream_publisher(self, msg_type, topic: str):
+    def stream_publisher(self, msg_type, topic: str) -> Publisher:
         pub = self.create_publisher(msg_type, topic, qos.STREAM)
         self._pubs[topic] = pub
         return pub

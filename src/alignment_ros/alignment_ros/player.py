@@ -170,6 +170,7 @@ class Playback:
             self.clock_pub = node.create_publisher(Clock, '/clock', CLOCK_QOS)
 
     def publish_clock(self) -> None:
+        assert self.clock_pub is not None  # called only when /clock is played (--clock or --clock-topics*)
         self.clock_pub.publish(Clock(clock=Time(nanoseconds=self.clock.now()).to_msg()))
 
     def clock_ticks(self, done: threading.Event) -> None:

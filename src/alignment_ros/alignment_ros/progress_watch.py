@@ -18,6 +18,7 @@ import sys
 import threading
 import time
 
+import numpy as np
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -40,7 +41,7 @@ class GraphWatcher:
     def __init__(self, progress: Progress, node_name: str = 'progress_watch') -> None:
         self.progress = progress
         self.node_name = node_name
-        self._sigma = None
+        self._sigma: np.ndarray | None = None   # the latest misalignment 1-sigma (3,) rad, if any
         self._ctx: Context | None = None
         self._thread: threading.Thread | None = None
 

@@ -384,7 +384,7 @@ def run(args: argparse.Namespace, ros_argv: list[str],
 def _stats(args: argparse.Namespace, rec: Recorder, writer: BagWriter, reason: str,
            expected: dict[str, int] | None, reached: ProgressPublisher | None) -> dict[str, Any]:
     """What the recording did (the --stats file)."""
-    span = (rec.last_rx - rec.first_rx) if rec.first_rx is not None else 0.0
+    span = (rec.last_rx - rec.first_rx) if rec.first_rx is not None and rec.last_rx is not None else 0.0
     total = sum(rec.counts.values())
     return {
         'bag': str(args.output),

@@ -180,10 +180,11 @@ def scenario_next_to(*paths: Path | None) -> dict | None:
     return None
 
 
-def build(bags: list[Path], out: Path, s: dict | None, title: str, topics=None,
+def build(bags: list[Path | None], out: Path, s: dict | None, title: str, topics=None,
           report_dir: Path | None = None) -> Path:
     """Draw the bags' plots into out/plots (or out itself when report_dir is given as out) and
-    write report.md into report_dir (default out); return its path."""
+    write report.md into report_dir (default out); return its path. A None bag (e.g. no input
+    bag) is skipped."""
     report_dir = report_dir or out
     series, drawn = plots.read_and_draw([b for b in bags if b is not None], out, topics, scenario_next_to(*bags))
     path = Path(report_dir) / 'report.md'

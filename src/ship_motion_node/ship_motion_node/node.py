@@ -2,12 +2,14 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import numpy as np
 from geometry_msgs.msg import AccelStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.parameter import Parameter
+from rclpy.subscription import Subscription
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import NavSatFix
 
@@ -60,7 +62,7 @@ class ShipMotionNode(node_util.CountingNode):
         self.stream_publisher(Odometry, topics.SHIP_ODOM)
         self.stream_publisher(AccelStamped, topics.SHIP_ACCEL)
         self.stream_publisher(NavSatFix, topics.SHIP_FIX)
-        self._watchers: dict[str, object] = {}
+        self._watchers: dict[str, Subscription] = {}
         self.lead = self._watch([t for t in self.get_parameter('pace_topics').value if t])
         self.pace_waits = 0
         self.pace_wait_s = 0.0
@@ -77,8 +79,9 @@ class ShipMotionNode(node_util.CountingNode):
                          release_s=self.get_parameter('pace_release_s').value)
         for t in names:
             read = stamp_reader(types[t])
+            assert read is not None  # every stream without a stamp reader was refused above
             self._watchers[t] = self.create_subscription(topics.msg_class(types[t]), t,
-                                     lambda data, t=t, read=read: lead.note(t, read(data)), qos.WATCH, raw=True)
+                                                         _stamp_noter(lead, t, read), qos.WATCH, raw=True)
         return lead
 
     def _keep_lead(self, t_ns: int, stop) -> None:
@@ -193,6 +196,13 @@ class ShipMotionNode(node_util.CountingNode):
             self.executor_ref.spin_once(timeout_sec=0.01)
         if self.lead.unheard():
             self.get_logger().warning(f'paced streams never heard: {self.lead.unheard()}')
+
+
+def _stamp_noter(lead: LeadLimit, topic: str, read: Callable[[bytes], int]) -> Callable[[bytes], None]:
+    """A paced stream's watcher callback: notes the stamp of each raw (CDR) message to the lead."""
+    def note(data: bytes) -> None:
+        lead.note(topic, read(data))
+    return note
 
 
 def main() -> None:

@@ -15,8 +15,12 @@ PANELS = (('mach', 'Mach (-)', 1.0), ('alpha_rad', 'alpha (deg)', DEG), ('beta_r
           ('wind_up_mps', 'wind up (m/s)', 1.0))
 
 
-def _series(lab: Labelled | None, row: str, label: str) -> np.ndarray | None:
-    return None if lab is None else lab.column(row, label)
+def _series(lab: Labelled | None, row: str, label: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """(the stream's stamps t_s, the label's column of the row), None without the stream, row or label."""
+    if lab is None:
+        return None
+    column = lab.column(row, label)
+    return None if column is None else (lab.t_s, column)
 
 
 def air_data(s: RunSeries, path: Path) -> Path | None:
@@ -26,22 +30,26 @@ def air_data(s: RunSeries, path: Path) -> Path | None:
     fig, axs = style.figure(3, 2, 2.0)
     for n, (label, ylabel, scale) in enumerate(PANELS):
         ax = axs[n % 3, n // 3]
-        v = _series(est, 'value', label)
-        sig = _series(est, 'sigma', label)
-        tv = _series(truth, 'value', label)
-        if v is not None:
-            ax.plot(est.t_s, v * scale, color='tab:blue', lw=1.0, label='estimate')
+        est_series = _series(est, 'value', label)
+        sig_series = _series(est, 'sigma', label)
+        truth_series = _series(truth, 'value', label)
+        sig = None if sig_series is None else sig_series[1]
+        if est_series is not None:
+            est_t_s, v = est_series
+            ax.plot(est_t_s, v * scale, color='tab:blue', lw=1.0, label='estimate')
             if sig is not None:
-                ax.fill_between(est.t_s, (v - 3 * sig) * scale, (v + 3 * sig) * scale, color='tab:blue',
+                ax.fill_between(est_t_s, (v - 3 * sig) * scale, (v + 3 * sig) * scale, color='tab:blue',
                                 alpha=0.2, lw=0, label='±3σ')
-        if tv is not None:
-            ax.plot(truth.t_s, tv * scale, 'k--', lw=0.9, label='truth')
-        if v is None and tv is None:
+        if truth_series is not None:
+            truth_t_s, tv = truth_series
+            ax.plot(truth_t_s, tv * scale, 'k--', lw=0.9, label='truth')
+        if est_series is None and truth_series is None:
             style.note(ax, f'no {label}')
-        elif v is not None:
-            tvi = None if tv is None else np.interp(est.t_s, truth.t_s, tv)
+        elif est_series is not None:
+            est_t_s, v = est_series
+            tvi = None if truth_series is None else np.interp(est_t_s, *truth_series)
             band = [] if sig is None else [v - 3 * sig, v + 3 * sig]
-            lim = style.limits([x * scale for x in (v, tvi, *band) if x is not None], est.t_s, skip=0.25)
+            lim = style.limits([x * scale for x in (v, tvi, *band) if x is not None], est_t_s, skip=0.25)
             if lim:
                 ax.set_ylim(*lim)
         ax.set_ylabel(ylabel)

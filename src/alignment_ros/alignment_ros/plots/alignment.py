@@ -69,6 +69,7 @@ def misalignment(s: RunSeries, path: Path) -> Path | None:
             ax.legend(loc='upper right', ncol=3)
             ax.set_title('estimate' + (' and truth' if truth is not None else ''))
         if truth is not None:
+            assert tv is not None  # interpolated above whenever there is a truth
             _error_panel(axs[k, 1], t, mu_am[:, k], tv, sig_am, k)
     return style.finish(fig, axs, 'Misalignment (aircraft FLU axes)', path)
 
