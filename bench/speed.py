@@ -17,7 +17,7 @@ table (bench/speed_table.py) into the README's and docs/speed.md's speed blocks,
 commit, the date and the machine's load.
 
 Every measurement runs in a child process (`--child PART`, PYTHONPATH pointing at the tree
-measured). Engine: TransferAlignment on a simulated `deck` run (--seconds at 100 Hz); per IMU
+measured). Engine: TransferAlignment on a simulated `deck_paper` run (--seconds at 100 Hz); per IMU
 step the three samples are pushed and process() runs; median over the steps after the first
 tenth, best of --repeat. Filter: our KalmanFilter (Joseph form) and filterpy's on the same
 n = 15, m = 3 workload with the engine's measurement matrix H = [0 I 0 0 -[u x]], median per
@@ -37,6 +37,7 @@ import argparse
 import json
 import os
 import resource
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -48,12 +49,14 @@ import speed_table
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ('alignment_core', 'alignment_experiments')
+SETTINGS = ('runs', 'seconds', 'repeat', 'kf_steps', 'graph_runs', 'mc_scenarios')
+"""The arguments that shape the measurements, recorded with a published run."""
 
 
 # ----- the measurements (child side) -----
 
 def engine_us(seconds: float, repeat: int) -> dict:
-    """Median / p95 us per IMU step with its LDV + master match, vm15 on the deck scenario."""
+    """Median / p95 us per IMU step with its LDV + master match, vm15 on the deck_paper scenario."""
     from alignment_core import pipeline
     from alignment_core.config import scenario
     sc = scenario.load('deck_paper', {'duration_s': seconds})
@@ -230,7 +233,7 @@ def main() -> None:
         from graph_rtf import graph as graph_run  # bench/graph_rtf.py: run_graph.sh at a real-time factor
         graphs = [graph_run(0.0) for _ in range(a.graph_runs)]
         memory = batch_memory() if a.publish else None
-    print(f'\nengine per IMU step + 100 Hz master match (vm15, deck, {a.seconds:g} s, best of {a.repeat}):')
+    print(f'\nengine per IMU step + 100 Hz master match (vm15, deck_paper, {a.seconds:g} s, best of {a.repeat}):')
     for name, e in eng.items():
         print(f'  {name:12s} median {e["median_us"]:7.1f} us  p95 {e["p95_us"]:7.1f} us  ({e["updates"]} updates)')
     print(f'bare filter predict + update, n=15 m=3 (engine H), best of {a.repeat}: ours {kf["ours_us"]:.1f} us, '
@@ -247,8 +250,9 @@ def main() -> None:
         print(f'  {sc:10s} {name:12s} workers={w}: {r["wall_s"]:7.1f} s  {r["runs_per_min"]:6.1f} runs/min  '
               f'-> 100 runs in {100 / r["runs_per_min"]:5.1f} min; {r["cpu_s_per_run"]:5.1f} CPU s per run')
     for g in graphs:
+        start = 'unknown' if g['startup_s'] is None else f'{g["startup_s"]:.2f} s'
         print(f'graph, default scenario, --real-time-factor 0: whole-run RTF {g["whole_run_rtf"]:.2f}, first message '
-              f'{g["startup_s"]:.2f} s after the command, {g["lost"]} lost, the scored estimate '
+              f'{start} after the command, {g["lost"]} lost, the scored estimate '
               f'{"equal to" if g["same_estimate"] else "DIFFERENT FROM"} the batch pipeline\'s; '
               'CPU s per simulated minute: '
               + ', '.join(f'{n} {60.0 * c / g["sim_time_s"]:.1f}' for n, c in g['cpu_s'].items() if c is not None))
@@ -256,10 +260,11 @@ def main() -> None:
         print(f'batch peak RSS, deck: {memory["peak_1h_mib"]:.0f} MiB for 1 h; ~ {memory["base_mib"]:.0f} MiB + '
               f'{memory["per_hour_mib"]:.0f} MiB per simulated hour')
     if a.publish:
-        args = ' '.join(sys.argv[1:])
+        args = shlex.join(sys.argv[1:])
         out = {'stamp': {'commit': version, 'date': time.strftime('%Y-%m-%d', time.gmtime()),
                          'cpus': os.cpu_count(), 'load_start': load0, 'load_end': os.getloadavg()[0],
-                         'command': f'scripts/bench.sh speed {args}'},
+                         'command': f'scripts/bench.sh speed {args}',
+                         'settings': {k: v for k, v in vars(a).items() if k in SETTINGS}},
                'engine': eng['today'], 'kf': kf, 'pyins': peer or None, 'graphs': graphs, 'memory': memory,
                'mc': {sc: {str(w): mc[(sc, 'today', w)] for w in (1, 2)} for sc in a.mc_scenarios}}
         speed_table.RESULT.parent.mkdir(exist_ok=True)

@@ -120,7 +120,7 @@ def write(out: Path, exp: Experiment, outcomes: list[RunOutcome], seeds: int, fi
         arrays[f'run{o.spec.index}_t_s'] = o.t_s
         arrays[f'run{o.spec.index}_err_arcmin'] = o.err_t
         arrays[f'run{o.spec.index}_sigma_arcmin'] = o.sigma_t
-    # allow_pickle: numpy's default, named so that no run{i}_* key could be taken for that flag
+    # allow_pickle: numpy's default, named so that mypy does not match **arrays against that bool flag
     np.savez_compressed(out / 'series.npz', allow_pickle=True, **arrays)
     (out / 'timing.json').write_text(json.dumps({
         'wall_s': wall_s, 'workers': workers, 'runs': len(outcomes),
