@@ -61,6 +61,12 @@ def shown(value: float, digits: int, at_least: bool) -> str:
 NOT_MEASURED = 'not measured in this run'
 
 
+def _setting(value: Any) -> str:
+    """A recorded argument as typed on a command line (a list: its items, space-separated)."""
+    return ' '.join(str(v) for v in value) if isinstance(value, list) else f'{value:g}' \
+        if isinstance(value, float) else str(value)
+
+
 def _list(values: list[float], fmt: Callable[[float], str]) -> str:
     return ', '.join(fmt(v) for v in values)
 
@@ -137,7 +143,7 @@ def render(r: dict[str, Any]) -> str:
     s = r['stamp']
     settings = s.get('settings')
     lines += ['', f"Measured by `{s['command']}`"
-              + (' (' + ', '.join(f'{k} {v}' for k, v in settings.items()) + ')' if settings else '')
+              + (' (' + ', '.join(f'{k} {_setting(v)}' for k, v in settings.items()) + ')' if settings else '')
               + f" at commit `{s['commit']}`, {s['date']}, {s['cpus']} CPUs, load average {s['load_start']:.1f} "
               f"at the start and {s['load_end']:.1f} at the end; ratios are only meaningful within one run."]
     return '\n'.join(lines) + '\n'
