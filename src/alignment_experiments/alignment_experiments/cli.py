@@ -8,7 +8,8 @@ from pathlib import Path
 
 from . import air_data_runs, monte_carlo, report, results
 from .air_data_catalogue import AIR_DATA_EXPERIMENTS, AirDataExperiment
-from .catalogue import CATALOGUE, Experiment
+from .catalogue import CATALOGUE
+from .experiment import Experiment
 
 
 def main(argv: list[str] | None = None) -> int:

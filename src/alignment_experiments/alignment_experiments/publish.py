@@ -27,7 +27,8 @@ import sys
 from pathlib import Path
 
 from .air_data_catalogue import AIR_DATA_EXPERIMENTS, AirDataExperiment
-from .catalogue import CATALOGUE, Experiment
+from .catalogue import CATALOGUE
+from .experiment import Experiment
 
 ROOT = Path(os.environ.get('ALIGN_ROOT') or Path(__file__).resolve().parents[3])
 RESULTS_MD = ROOT / 'docs' / 'results.md'

@@ -8,7 +8,7 @@ from typing import SupportsFloat
 
 import numpy as np
 
-from .catalogue import Experiment
+from .experiment import Experiment
 from .monte_carlo import RunOutcome
 from .results import cells_of, code_version, value_names
 from .statistics import axis_stats, nees_bounds

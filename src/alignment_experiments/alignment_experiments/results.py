@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .catalogue import AXES, Experiment
+from .experiment import AXES, Experiment
 from .monte_carlo import RunOutcome
 from .statistics import axis_stats, nees_bounds
 

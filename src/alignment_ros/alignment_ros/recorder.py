@@ -40,12 +40,10 @@ once the first subscriptions exist. ``--progress-topic``: :mod:`alignment_ros.re
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from collections import Counter
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import rclpy
@@ -63,6 +61,7 @@ from alignment_ros.progress import Progress
 from alignment_ros.qos import STREAM
 from alignment_ros.record_options import TopicFilter, parse_args
 from alignment_ros.record_progress import ProgressPublisher
+from alignment_ros.record_stats import read_expected, recording_stats, report
 from alignment_ros.topics import CLOCK, msg_class
 
 from .dds_teardown import say_once, shut_down
@@ -75,15 +74,6 @@ PUBLISHERS_INTERVAL_S = 1.0  # the recorded topics' publishers are looked up thi
 TRIM_INTERVAL_S = 30.0  # freed heap (the reorder buffer's peaks) handed back to the OS this often
 WALL_STAMPED = ('/rosout', '/parameter_events')   # rcl stamps these with the wall clock
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # rmw's name of a node not yet discovered
-
-
-def read_expected(path: Path) -> dict[str, int] | None:
-    """The expected counts ({topic: count}) once the file exists (written atomically), else None."""
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        return None
-    return {str(k): int(v) for k, v in json.loads(text).items()}
 
 
 def info(text: str) -> None:
@@ -370,7 +360,7 @@ def run(args: argparse.Namespace, ros_argv: list[str],
                 rec.finish_endpoints()
                 rec.note_publishers()
             writer.close()
-        stats = _stats(args, rec, writer, reason, expected, reached)
+        stats = recording_stats(args, rec, writer, reason, expected, reached)
         report(stats)
     except BaseException as exc:
         if isinstance(exc, BagError):      # its line before a teardown that might not end
@@ -381,52 +371,16 @@ def run(args: argparse.Namespace, ros_argv: list[str],
     return stats
 
 
-def _stats(args: argparse.Namespace, rec: Recorder, writer: BagWriter, reason: str,
-           expected: dict[str, int] | None, reached: ProgressPublisher | None) -> dict[str, Any]:
-    """What the recording did (the --stats file)."""
-    span = (rec.last_rx - rec.first_rx) if rec.first_rx is not None and rec.last_rx is not None else 0.0
-    total = sum(rec.counts.values())
-    return {
-        'bag': str(args.output),
-        'files': writer.metadata.relative_file_paths if writer.metadata else [],
-        'topics': rec.counts,
-        'total': total,
-        'end_reason': reason,
-        'expected': expected,
-        'missing': rec.missing(expected or {}),
-        'taken_directly': rec.taken_directly,
-        'last_stamp_ns': rec.last_stamp_ns,
-        'publishers': rec.publishers(),
-        'executor': args.executor,
-        'progress_published': reached.published if reached is not None else 0,
-        'receive_span_s': span,
-        'first_message_unix_s': rec.first_rx_unix,
-        'receive_rate_msg_s': total / span if span > 0 else None,
-        'cpu_s': time.process_time(),
-        'reorder': {'peak_bytes': writer.reorder.peak_bytes,
-                    'peak_messages': writer.reorder.peak_messages, 'late': writer.reorder.late},
-    }
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``recorder`` (scripts/record.sh)."""
     raw_argv = sys.argv if argv is None else ['recorder', *argv]
     args = parse_args(remove_ros_args(raw_argv)[1:])
     try:
-        run(args, raw_argv, lambda stats: _report(args, stats))
+        run(args, raw_argv, lambda stats: report(args, stats))
     except BagError as exc:
         say_once(exc, f'recorder: {exc}')
         return 1
     return 0
-
-
-def _report(args: argparse.Namespace, stats: dict[str, Any]) -> None:
-    """The stats file and the closing line."""
-    if args.stats:
-        args.stats.parent.mkdir(parents=True, exist_ok=True)
-        args.stats.write_text(json.dumps(stats, indent=2) + '\n')
-    print(f'recorder done ({stats["end_reason"]}): {stats["total"]} messages in {args.output}',
-          flush=True)
 
 
 if __name__ == '__main__':

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import yaml
 
-from alignment_core.aircraft.kinematics import AircraftConfig, check_catapult_grid
+from alignment_core.aircraft.aircraft_config import AircraftConfig
+from alignment_core.aircraft.catapult import check_catapult_grid
 from alignment_core.config.given import Scope, fill_defaults, with_overrides, within
 from alignment_core.estimation.air_data.config import AirDataFilterConfig
 from alignment_core.estimation.config import FilterConfig
