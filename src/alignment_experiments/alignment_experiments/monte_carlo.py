@@ -205,4 +205,6 @@ def run_many(specs: list[RunSpec], workers: int = 1, scheduler: str | None = Non
         bar.close()
         if ex is not None:
             ex.shutdown()
-    return out  # type: ignore[return-value]
+    done = [o for o in out if o is not None]
+    assert len(done) == len(specs)          # every spec ran (a failed run raised above)
+    return done
