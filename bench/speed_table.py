@@ -52,7 +52,7 @@ def _met(ok: bool) -> str:
 
 def shown(value: float, digits: int, at_least: bool) -> str:
     """value with `digits` decimals, rounded down for an at-least target (up for an at-most one),
-    so that a shown value equal to the target means the target is met."""
+    so that a value that misses its target is never shown as one that meets it."""
     scale = 10.0 ** digits
     v = (math.floor if at_least else math.ceil)(value * scale) / scale
     return f'{v:.{digits}f}'
@@ -63,8 +63,9 @@ NOT_MEASURED = 'not measured in this run'
 
 def _setting(value: Any) -> str:
     """A recorded argument as typed on a command line (a list: its items, space-separated)."""
-    return ' '.join(str(v) for v in value) if isinstance(value, list) else f'{value:g}' \
-        if isinstance(value, float) else str(value)
+    if isinstance(value, list):
+        return ' '.join(str(v) for v in value)
+    return f'{value:g}' if isinstance(value, float) else str(value)
 
 
 def _list(values: list[float], fmt: Callable[[float], str]) -> str:
@@ -99,7 +100,7 @@ def rows(r: dict[str, Any]) -> list[tuple[str, str, str, str]]:
         out.append((goal, target, f"{k['ours_us']:.1f} us against {k['filterpy_us']:.1f} us: "
                                   f"{shown(ratio, 2, True)}x", _met(ratio >= KF_RATIO)))
     graphs = r.get('graphs', [])
-    measured = graphs and all(g.get('startup_s') is not None and 'same_estimate' in g for g in graphs)
+    measured = bool(graphs) and all(g.get('startup_s') is not None and 'same_estimate' in g for g in graphs)
     graph_goals = [('Graph, default scenario at `--real-time-factor 0`: whole-run RTF', f'>= {GRAPH_RTF:g}x'),
                    ('Graph: first message after the command', f'< {STARTUP_S:g} s'),
                    ('Graph: messages lost', '0'),
