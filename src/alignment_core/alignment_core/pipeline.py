@@ -30,6 +30,7 @@ from alignment_core.sensors.ldv import LdvStage
 from alignment_core.sensors.master_ins import MasterInsStage
 from alignment_core.ship.motion import make_motion
 from alignment_core.ship.paper import PaperShipMotion
+from alignment_core.ship.stamped import split
 from alignment_core.units import DEG
 
 
@@ -62,8 +63,7 @@ class SlaveImuStage:
         dth, dv = self.kin.increments_batch(sb.slice(slice(0, -1)), sb.slice(slice(1, None)),
                                             tau[:-1], tau[1:])
         gyro, accel = self.errors.measure_batch(dth, dv, tau[1:] - tau[:-1])
-        imu = [ImuSample(t_ns=int(sb.t_ns[k + 1]), gyro=gyro[k], accel=accel[k])
-               for k in range(len(gyro))]
+        imu = [ImuSample(*rows) for rows in zip(sb.t_ns[1:].tolist(), gyro, accel)]
         self.prev = sb.sample(len(sb) - 1)
         return truth, imu
 
@@ -116,14 +116,20 @@ class BatchResult:
 
 def ship_source(sc: Scenario) -> PaperShipMotion:
     """The ship model for `sc.ship.mode` ('paper' or 'spectral'); both have
-    `samples(t, t0_ns, dt_ns, k0)`."""
+    `sample_batch(t, t0_ns, dt_ns, k0)` and `samples(t, t0_ns, dt_ns, k0)`."""
     return make_motion(sc.ship, sc.seed)
 
 
-def ship_samples(sc: Scenario) -> list[ShipSample]:
+def ship_batch(sc: Scenario) -> ShipBatch:
+    """The ship truth at every sample of the run."""
     k = np.arange(sc.n_samples)
     taus = (k * sc.dt_ns) / 1e9
-    return ship_source(sc).samples(taus, sc.t0_ns, sc.dt_ns)
+    return ship_source(sc).sample_batch(taus, sc.t0_ns, sc.dt_ns)
+
+
+def ship_samples(sc: Scenario) -> list[ShipSample]:
+    """`ship_batch` as samples."""
+    return split(ship_batch(sc))
 
 
 @dataclass
@@ -146,7 +152,7 @@ class Inputs:
 def simulate(sc: Scenario) -> Inputs:
     """Ship, slave IMU, master INS and LDV for the whole run, vectorised (the same numbers
     the nodes produce sample by sample)."""
-    ships = ShipBatch.of(ship_samples(sc))
+    ships = ship_batch(sc)
     slave = SlaveImuStage(sc)
     truth, imu = slave.run_batch(ships)
     masters = MasterInsStage(sc.master, sc.seed, sc.ship.lat_deg * DEG, sc.rate_hz, sc.t0_ns).run_batch(ships)

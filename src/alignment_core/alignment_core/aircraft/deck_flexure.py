@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from alignment_core.compiled import kernel
 from alignment_core.gauss_markov import gm2_discrete
 from alignment_core.recent_rows import RecentRows
 from alignment_core.rng import stage_rng
@@ -90,13 +91,14 @@ class FlexureProcess:
         self._n = 0
         self.k_change = (int(round(cfg.change_at_s * rate_hz)) if cfg.change_at_s > 0.0 and cfg.change_factor != 1.0
                          else None)
-        self._store()
+        self._store(self.x[None])
 
-    def _store(self) -> None:
-        s = self.x.sum(axis=0)
-        self._th.append(self.static + s[:, 0])
-        self._thd.append(s[:, 1])
-        self._n += 1
+    def _store(self, xs: np.ndarray) -> None:
+        """Append the samples of the states xs (m, P, 3, 2): theta (static part included), theta'."""
+        s = xs.sum(axis=1)
+        self._th.extend(self.static + s[..., 0])
+        self._thd.extend(s[..., 1])
+        self._n += len(xs)
 
     def _extend(self, k_max: int) -> None:
         while self._n <= k_max:
@@ -105,9 +107,9 @@ class FlexureProcess:
             if self.k_change is not None:
                 k = np.arange(self._n, self._n + m)        # sample index each step produces
                 noise[k >= self.k_change] *= self.cfg.change_factor
-            for j in range(m):
-                self.x = self.x @ self.phi_t + noise[j] @ self.l_t
-                self._store()
+            xs = _propagate(self.x, self.phi_t, noise @ self.l_t)
+            self.x = xs[-1].copy()
+            self._store(xs)
 
     def index(self, tau) -> np.ndarray:
         return np.rint(np.asarray(tau, dtype=float) * self.rate_hz).astype(np.int64)
@@ -128,3 +130,17 @@ class FlexureProcess:
     def generate(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """The first n samples (for tests and plots)."""
         return self.at(np.arange(n))
+
+
+@kernel
+def _propagate(x, phi_t, drive):
+    """The states (m, P, 3, 2) after each of m exact steps x <- x phi_t + drive[j] from x (P, 3, 2),
+    drive[j] = noise_j L^T: per process one BLAS product, the one numpy's x @ phi_t makes."""
+    m = drive.shape[0]
+    xs = np.empty((m,) + x.shape)
+    x = x.copy()
+    for j in range(m):
+        for p in range(x.shape[0]):
+            x[p] = np.dot(x[p], phi_t[p]) + drive[j, p]
+        xs[j] = x
+    return xs

@@ -172,10 +172,7 @@ class LdvModel:
             valid &= ~self._dropout_batch(sb.t_ns)
         if self.has_errors:
             v_true = v_true * (1.0 + self.scale) + self.bias
-        v_rel = v_true + n
-        zero = np.zeros(3)
-        return [LdvSample(t_ns=int(sb.t_ns[k]), v_s=v_rel[k] if valid[k] else zero,
-                          sigma=cfg.noise_mps, valid=bool(valid[k])) for k in range(len(sb))]
+        return _samples(sb.t_ns, v_true + n, valid, cfg.noise_mps)
 
     def _relative(self, sb: ShipBatch, p_a: np.ndarray, q_a: np.ndarray, v_a_b: np.ndarray
                   ) -> tuple[Rotation, np.ndarray, np.ndarray, np.ndarray]:
@@ -212,9 +209,17 @@ class LdvModel:
         if self.has_errors:
             s = s * (1.0 + self.scale[0]) + self.bias[0]
         s = s + n
-        zero = np.zeros(3)
-        return [LdvSample(t_ns=int(sb.t_ns[k]), v_s=s[k] * u[k] if valid[k] else zero, sigma=cfg.noise_mps,
-                          valid=bool(valid[k]), beam=u[k] if valid[k] else None) for k in range(len(sb))]
+        return _samples(sb.t_ns, s[:, None] * u, valid, cfg.noise_mps, u)
+
+
+def _samples(t_ns: np.ndarray, v_s: np.ndarray, valid: np.ndarray, sigma: float,
+             beam: np.ndarray | None = None) -> list[LdvSample]:
+    """The samples of K rows: stamps t_ns, velocities v_s (K, 3), validity, beams (K, 3) or None;
+    an invalid sample carries a zero velocity and no beam."""
+    zero = np.zeros(3)
+    beams = beam if beam is not None else [None] * len(v_s)
+    return [LdvSample(t, v if ok else zero, sigma, ok, b if ok else None)
+            for t, v, ok, b in zip(t_ns.tolist(), v_s, valid.tolist(), beams)]
 
 
 class LdvStage:

@@ -226,7 +226,9 @@ class MasterInsModel:
     def measure(self, s: ShipSample) -> MasterSample:
         return self.measure_batch(ShipBatch.of([s]))[0]
 
-    def measure_batch(self, sb: ShipBatch) -> list[MasterSample]:
+    def measure_batch(self, sb: ShipBatch, delay_ns: np.ndarray | int = 0) -> list[MasterSample]:
+        """The solutions at the ship samples, stamped t + delay_ns (each sample's transport delay,
+        sensors/timing.py; 0: the data's validity time)."""
         c_true = Rotation.from_quat(sb.q_nb)
         noise = self.rng.standard_normal((len(sb), 3)) * self.cfg.velocity_noise_mps
         if self.t_change_ns is not None:
@@ -245,8 +247,8 @@ class MasterInsModel:
         q = c_est.as_quat()
         v_b = rotate_rows(c_est.as_matrix(), v_n, inverse=True)
         w_b = sb.w_b + self.gyro_bias_b
-        return [MasterSample(t_ns=int(sb.t_ns[k]), p_w=sb.p_w[k].copy(), q_nb=q[k], v_b=v_b[k],
-                             w_b=w_b[k]) for k in range(len(sb))]
+        stamps = (sb.t_ns + delay_ns).tolist()
+        return [MasterSample(*rows) for rows in zip(stamps, sb.p_w.copy(), q, v_b, w_b)]
 
 
 @dataclass(frozen=True)
@@ -271,16 +273,8 @@ class MasterInsStage:
         self.timing = SensorTiming(cfg.rate_hz, cfg.latency_s, base_rate_hz, t0_ns, cfg.latency_jitter_s, jitter)
 
     def _outputs(self, sb: ShipBatch) -> list[MasterOutput]:
-        ms = self.model.measure_batch(sb)
-        if not self.timing.jitter_ns:
-            lat = self.timing.latency_ns
-            return [MasterOutput(MasterSample(t_ns=m.t_ns + lat, p_w=m.p_w, q_nb=m.q_nb, v_b=m.v_b, w_b=m.w_b)
-                                 if lat else m, self.model.last_phi[k], self.model.last_dv[k])
-                    for k, m in enumerate(ms)]
-        delays = self.timing.delays_ns(len(ms))
-        return [MasterOutput(MasterSample(t_ns=m.t_ns + int(delays[k]), p_w=m.p_w, q_nb=m.q_nb, v_b=m.v_b,
-                                          w_b=m.w_b), self.model.last_phi[k], self.model.last_dv[k])
-                for k, m in enumerate(ms)]
+        ms = self.model.measure_batch(sb, self.timing.delays_ns(len(sb)))
+        return [MasterOutput(*rows) for rows in zip(ms, self.model.last_phi, self.model.last_dv)]
 
     def step(self, s: ShipSample) -> list[MasterOutput]:
         new = self._outputs(ShipBatch.of([s])) if self.timing.due(s.t_ns) else []

@@ -24,8 +24,9 @@ from scipy.spatial.transform import Rotation
 from alignment_core.geometry import earth
 from alignment_core.geometry.euler import euler_acc_to_body_acc, euler_rates_to_body_rate, heading_to_yaw
 from alignment_core.rng import stage_rng
-from alignment_core.samples import ShipSample
+from alignment_core.samples import ShipBatch, ShipSample
 from alignment_core.ship.config import BALES_HS_M, PAPER_AMPLITUDE_DEG, PAPER_PERIOD_S, ShipConfig
+from alignment_core.ship.stamped import split, stamped_batch
 from alignment_core.ship.track import make_track
 from alignment_core.units import DEG, KNOT
 from alignment_core.validation import ConfigError
@@ -107,10 +108,14 @@ class PaperShipMotion:
         return lat, lon, h
 
     def samples(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int = 0) -> list[ShipSample]:
-        """Ship samples k0 .. k0+len(t)-1 at times t (s since start); stamps t0_ns + k*dt_ns."""
+        """`sample_batch` as samples."""
+        return split(self.sample_batch(t, t0_ns, dt_ns, k0))
+
+    def sample_batch(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int = 0) -> ShipBatch:
+        """Ship samples k0 .. k0+len(t)-1 at times t (s since start), stamps t0_ns + k*dt_ns."""
         t = np.asarray(t, dtype=float)
         if self.track is not None:
-            return self._samples_mmg(t, t0_ns, dt_ns, k0)
+            return self._batch_mmg(t, t0_ns, dt_ns, k0)
         e, ed, edd = self.euler(t)
         w_b = euler_rates_to_body_rate(e, ed)
         wdot_b = euler_acc_to_body_acc(e, ed, edd)
@@ -126,10 +131,9 @@ class PaperShipMotion:
         a_b = np.einsum('nji,nj->ni', c_nb, a_n)
         lat, lon, hh = self.geodetic(t)
         p_w = self.plane.from_geodetic(lat, lon, hh)
-        return [ShipSample(t_ns=t0_ns + (k0 + i) * dt_ns, p_w=p_w[i], q_nb=q[i], v_b=v_b[i],
-                           w_b=w_b[i], a_b=a_b[i], wdot_b=wdot_b[i]) for i in range(len(t))]
+        return stamped_batch(t0_ns, dt_ns, k0, p_w, q, v_b, w_b, a_b, wdot_b)
 
-    def _samples_mmg(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int) -> list[ShipSample]:
+    def _batch_mmg(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int) -> ShipBatch:
         """The paper's sinusoids about the MMG track: yaw and roll of the track added to the
         sinusoids, position and velocity of the track plus heave."""
         assert self.track is not None                   # course_keeping 'mmg'
@@ -154,5 +158,4 @@ class PaperShipMotion:
         v_b = np.einsum('nji,nj->ni', c_nb, v_n)
         a_b = np.einsum('nji,nj->ni', c_nb, a_n)
         p_w = self.plane.from_geodetic(lf['lat'], lf['lon'], h)
-        return [ShipSample(t_ns=t0_ns + (k0 + i) * dt_ns, p_w=p_w[i], q_nb=q[i], v_b=v_b[i],
-                           w_b=w_b[i], a_b=a_b[i], wdot_b=wdot_b[i]) for i in range(len(t))]
+        return stamped_batch(t0_ns, dt_ns, k0, p_w, q, v_b, w_b, a_b, wdot_b)

@@ -39,10 +39,11 @@ from scipy.spatial.transform import Rotation
 from alignment_core.geometry import earth
 from alignment_core.geometry.euler import euler_acc_to_body_acc, euler_rates_to_body_rate, heading_to_yaw
 from alignment_core.rng import stage_rng
-from alignment_core.samples import ShipSample
+from alignment_core.samples import ShipBatch, ShipSample
 from alignment_core.ship import rao, sea_state, wave_spectrum
 from alignment_core.ship.config import ShipConfig
 from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack, quintic_coefficients, quintic_values
+from alignment_core.ship.stamped import split, stamped_batch
 from alignment_core.ship.track import StraightCourse
 from alignment_core.units import DEG, KNOT
 
@@ -387,9 +388,11 @@ class SpectralShipMotion:
                 'w_b': euler_rates_to_body_rate(e, ed), 'wdot_b': euler_acc_to_body_acc(e, ed, edd),
                 'lat': lat_w, 'lon': lon_w, 'wf': x, 'lf': lf}
 
-    def samples(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int = 0) -> list[ShipSample]:
-        """Ship samples k0 .. k0+len(t)-1 at times t (s since start); stamps t0_ns + k*dt_ns."""
+    def sample_batch(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int = 0) -> ShipBatch:
+        """Ship samples k0 .. k0+len(t)-1 at times t (s since start), stamps t0_ns + k*dt_ns."""
         b = self.batch(t)
-        p, q, v, w, a, wd = b['p_w'], b['q_nb'], b['v_b'], b['w_b'], b['a_b'], b['wdot_b']
-        return [ShipSample(t_ns=t0_ns + (k0 + i) * dt_ns, p_w=p[i], q_nb=q[i], v_b=v[i], w_b=w[i],
-                           a_b=a[i], wdot_b=wd[i]) for i in range(len(b['t']))]
+        return stamped_batch(t0_ns, dt_ns, k0, b['p_w'], b['q_nb'], b['v_b'], b['w_b'], b['a_b'], b['wdot_b'])
+
+    def samples(self, t: np.ndarray, t0_ns: int, dt_ns: int, k0: int = 0) -> list[ShipSample]:
+        """`sample_batch` as samples."""
+        return split(self.sample_batch(t, t0_ns, dt_ns, k0))
