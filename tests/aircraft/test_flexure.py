@@ -106,3 +106,15 @@ def test_truth_misalignment_is_the_mounting_plus_the_flexure():
     flex = sc.aircraft.flexure
     assert np.max(np.abs(off)) > 0.1 * ARCMIN
     assert np.max(np.abs(off)) < 5 * np.hypot(flex.static_arcmin, flex.sigma_arcmin) * ARCMIN
+
+
+def test_reading_the_process_in_pieces_gives_the_same_samples_as_at_once():
+    """The node reads the flexure a sample at a time, the batch all at once: the recursion's
+    chunks (its noise drawn a block at a time) must not show in the samples."""
+    cfg = FlexureConfig(enabled=True, sigma_arcmin=3.0, tau_s=5.0, sigma2_arcmin=2.0, tau2_s=0.5,
+                        change_at_s=40.0, change_factor=2.0)
+    whole = FlexureProcess(cfg, seed=5, rate_hz=100.0).generate(9000)
+    pieces = FlexureProcess(cfg, seed=5, rate_hz=100.0)
+    parts = [pieces.at(np.arange(a, min(a + 37, 9000))) for a in range(0, 9000, 37)]
+    for i in range(2):
+        np.testing.assert_array_equal(np.concatenate([p[i] for p in parts]), whole[i])
