@@ -86,3 +86,24 @@ def test_scalar_random_constant_posterior():
         assert kf.x[0] == pytest.approx(p_i * z[:i + 1].sum() / r, rel=1e-9, abs=1e-12)
     # and the estimate is within 4 sigma of the truth
     assert abs(kf.x[0] - x_true) < 4.0 * np.sqrt(kf.P[0, 0])
+
+
+def test_a_float32_filter_stays_float32_when_its_state_is_assigned_from_outside():
+    """The engine assigns x after feedback and P for launch noise or a bridged gap, in float64:
+    a float32 filter must keep computing in float32 (it ran with a float64 x before)."""
+    kf = KalmanFilter(np.zeros(3), np.eye(3), dtype=np.float32)
+    kf.x = np.array([1.0, 2.0, 3.0])
+    kf.P = np.eye(3) * 2.0
+    assert kf.x.dtype == np.float32 and kf.P.dtype == np.float32
+    kf.predict(np.eye(3), np.eye(3) * 0.1)
+    kf.update(np.array([1.0]), np.array([[1.0, 0.0, 0.0]]), np.array([[1.0]]))
+    assert kf.x.dtype == np.float32 and kf.P.dtype == np.float32
+
+
+def test_a_negative_nis_is_a_breakdown_not_an_accepted_update():
+    """S = H P H^T + R not positive definite (here P with a negative variance) gives a negative
+    NIS; the update must fail rather than be taken (and count as a small NIS)."""
+    kf = KalmanFilter(np.zeros(2), np.diag([-4.0, 1.0]))
+    with pytest.raises(np.linalg.LinAlgError):
+        kf.update(np.array([1.0]), np.array([[1.0, 0.0]]), np.array([[1.0]]))
+    assert kf.n_updates == 0 and np.array_equal(kf.x, np.zeros(2))

@@ -23,6 +23,7 @@ Nonlinear filters (EKF, UKF, CKF) also take callables:
 the filter's nominal model (before any innovation-driven fading, see fading.py)."""
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
@@ -116,8 +117,9 @@ def as_dtype(a, dtype) -> np.ndarray:
 
 
 def check_nis(nis: float) -> float:
-    if not np.isfinite(nis):
-        raise np.linalg.LinAlgError('innovation covariance is singular or not finite')
+    """nis, unless it shows S is not positive definite: not finite (S singular) or negative."""
+    if not 0.0 <= nis < math.inf:
+        raise np.linalg.LinAlgError('innovation covariance is singular, not finite or not positive definite')
     return nis
 
 

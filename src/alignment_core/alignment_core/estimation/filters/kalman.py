@@ -32,19 +32,38 @@ class KalmanFilter(Counters):
 
     def __init__(self, x0: np.ndarray, p0: np.ndarray, dtype=np.float64) -> None:
         self.dtype = np.dtype(dtype)
-        self.x = np.array(x0, dtype=self.dtype)
-        self.P = np.array(p0, dtype=self.dtype)
+        self._x = np.array(x0, dtype=self.dtype)
+        self._P = np.array(p0, dtype=self.dtype)
         self._init_counters()
+
+    @property
+    def x(self) -> np.ndarray:
+        return self._x
+
+    @x.setter
+    def x(self, value: np.ndarray) -> None:
+        """x assigned from outside (the engine's feedback) is kept in the filter's dtype: a float32
+        filter stays single precision (an array already of its dtype is kept as it is)."""
+        self._x = as_dtype(value, self.dtype)
+
+    @property
+    def P(self) -> np.ndarray:
+        return self._P
+
+    @P.setter
+    def P(self, value: np.ndarray) -> None:
+        """P assigned from outside (launch noise, a bridged gap, a velocity reset), in the filter's dtype."""
+        self._P = as_dtype(value, self.dtype)
 
     def reset_state(self, x: np.ndarray | None = None) -> None:
         """Closed-loop feedback: x <- 0 (or x); P is untouched."""
-        self.x = np.zeros_like(self.x) if x is None else np.array(x, dtype=self.dtype)
+        self._x = np.zeros_like(self._x) if x is None else np.array(x, dtype=self.dtype)
 
     def predict(self, phi: np.ndarray, qd: np.ndarray) -> None:
         """x <- Phi x, P <- Phi P Phi^T + Qd (symmetric by construction up to round-off, which
         the next update's symmetrisation removes)."""
         dt = self.dtype
-        self.x, self.P = kernels.predict(self.x, self.P, _ready(phi, dt), _ready(qd, dt))
+        self._x, self._P = kernels.predict(self._x, self._P, _ready(phi, dt), _ready(qd, dt))
         self.n_predicts += 1
 
     def _innovation(self, z, h, r, x, p):
@@ -58,17 +77,17 @@ class KalmanFilter(Counters):
         if z.ndim == 0:                       # one measurement given as a scalar
             z = z.reshape(1)
         try:
-            y, s, nis, accepted, x, p = kernels.update(self.x, self.P, z, h, r,
+            y, s, nis, accepted, x, p = kernels.update(self._x, self._P, z, h, r,
                                                        _INF if gate_chi2 is None else gate_chi2)
         except np.linalg.LinAlgError:           # S singular
             nis = math.nan
-        if not nis < _INF:
+        if not 0.0 <= nis < _INF:
             check_nis(nis)
         self.last_nis = nis
         if not accepted:
             self.n_gated += 1
             return UpdateResult(y, s, nis, False)
-        self.x, self.P = x, p
+        self._x, self._P = x, p
         self.n_updates += 1
         return UpdateResult(y, s, nis, True)
 
@@ -76,4 +95,4 @@ class KalmanFilter(Counters):
         """x += K y, P <- (I - K H) P (I - K H)^T + K R K^T, symmetrised (the same operations as
         update(), for the subclasses that change the prior before updating)."""
         dt = self.dtype
-        self.x, self.P = kernels.joseph(self.x, self.P, ph, s_inv, y, _ready(h, dt), _ready(r, dt))
+        self._x, self._P = kernels.joseph(self._x, self._P, ph, s_inv, y, _ready(h, dt), _ready(r, dt))
