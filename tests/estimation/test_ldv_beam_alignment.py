@@ -6,6 +6,8 @@ roll only as the ship's motion turns the beam; a vertical beam sees almost no he
 needs horizontal velocity differences)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -42,15 +44,16 @@ def test_a_vertical_beam_loses_the_heading():
 
 
 def test_a_beam_sample_for_a_vector_filter_is_rejected_and_counted():
-    """filter.ldv_mode given as vector against a beam LDV: its samples would be read as full
-    velocity vectors (wrong); they are rejected as `ldv_mode`, nothing is matched (relative velocity
+    """A filter told ldv_mode vector fed a beam LDV (a scenario refuses the contradiction; a node's
+    parameters or a recording may still bring it): its samples would be read as full velocity
+    vectors (wrong); they are rejected as `ldv_mode`, nothing is matched (relative velocity
     `ldv`: under `auto` a stream with no usable sample is taken as absent and matched as parked)."""
-    sc = scenario.load('deck_paper', {'duration_s': 2.0, 'ldv.mode': 'beam', 'filter.ldv_mode': 'vector',
-                                'filter.relative_velocity': 'ldv'})
-    res = pipeline.run(sc, keep_truth=False)
-    c = res.filter.counters
+    sc = scenario.load('deck_paper', {'duration_s': 2.0, 'ldv.mode': 'beam', 'filter.relative_velocity': 'ldv'})
+    inp = pipeline.simulate(sc)
+    f = pipeline.align(replace(sc, filter=replace(sc.filter, ldv_mode='vector')), inp)
+    c = f.counters
     assert c.rejected_ldv_mode == 201 and c.ldv == 0 and c.updates == 0
-    assert res.filter.status()[0] >= WARN
+    assert f.status()[0] >= WARN
 
 
 def test_beam_needs_a_model_with_three_velocity_rows():

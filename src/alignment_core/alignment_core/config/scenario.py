@@ -27,9 +27,13 @@ from alignment_core.sensors.imu import ImuConfig
 from alignment_core.sensors.ldv import LdvConfig
 from alignment_core.sensors.master_ins import MasterConfig
 from alignment_core.sensors.reference_ins import ReferenceInsConfig
-from alignment_core.sensors.timing import check_rate
+from alignment_core.sensors.timing import check_rate, decimation
 from alignment_core.ship.config import ShipConfig
 from alignment_core.validation import ConfigError, build, require, to_dict
+
+MAX_END_S = 2e9
+"""start_time_s + duration_s at most: stamps are int64 ns (up to 9.2e9 s) and a ROS header's seconds
+int32 (up to 2^31 s = 2.147e9 s, 2038 as Unix time); the margin holds the run-out and latencies."""
 
 
 @dataclass(frozen=True)
@@ -68,6 +72,10 @@ class Scenario:
         if given('start_time_s'):
             require(self.start_time_s > 0.0, f"start_time_s must be > 0 (0 means 'no clock' in ROS), "
                                              f"got {self.start_time_s}")
+            duration = self.duration_s if given('duration_s') else 0.0
+            require(self.start_time_s + duration <= MAX_END_S,
+                    f"start_time_s + duration_s must be <= {MAX_END_S:g} s (stamps in int64 ns and a ROS header's "
+                    f"int32 seconds, up to 2^31 s), got {self.start_time_s:g} + {duration:g} s")
         if given('duration_s', 'rate_hz'):
             require(abs(self.duration_s * self.rate_hz - round(self.duration_s * self.rate_hz)) < 1e-6,
                     "duration_s must be a whole number of samples")
@@ -87,6 +95,55 @@ class Scenario:
         if given('doppler.enabled', 'filter.model'):
             require(self.doppler.enabled or self.filter.model != 'seed001_13',
                     "filter.model seed001_13 matches the Doppler radar: set doppler.enabled true")
+        if given('master', 'ship.lat_deg'):
+            self.master.validate_at(self.ship.lat_deg)
+        self.validate_filter_fit(given)
+
+    def validate_filter_fit(self, given: Callable[..., bool]) -> None:
+        """The filter's options against the sensors and the aircraft it is given (FilterConfig alone
+        stays permissive: it also runs on recorded data)."""
+        f = self.filter
+        if given('ldv.mode', 'filter.ldv_mode'):
+            require(f.ldv_mode == self.ldv.mode,
+                    f"filter.ldv_mode = {f.ldv_mode} contradicts ldv.mode = {self.ldv.mode}: the filter would reject "
+                    f"every LDV sample as of the wrong kind (leave filter.ldv_mode out: it follows ldv.mode)")
+        if f.relative_velocity == 'zero' and given('filter.relative_velocity', 'aircraft', 'duration_s'):
+            moving = self.moves_on_deck()
+            require(not moving, f"filter.relative_velocity zero takes the slave as rigidly tied to the master's "
+                                f"body, but {moving}: use auto or ldv")
+        every = decimation(self.master.rate_hz, self.rate_hz)
+        if f.rate_matching and given('filter', 'master', 'rate_hz'):
+            why = ("its rate rows need the master valid (at its stamp - filter.master_latency_s) at the end of an IMU "
+                   "interval and its previous sample one IMU interval earlier; else none is formed (rate_unmatched)")
+            require(every == 1, f"filter.rate_matching needs the master at the IMU rate: master.rate_hz = "
+                                f"{self.master.rate_hz:g} Hz is not rate_hz = {self.rate_hz:g} Hz ({why})")
+            require(self.master.latency_jitter_s == 0.0,
+                    f"filter.rate_matching needs master stamps on the IMU grid: master.latency_jitter_s = "
+                    f"{self.master.latency_jitter_s:g} s moves them off it ({why})")
+            offset_ns = round(self.master.latency_s * 1e9) - round(f.master_latency_s * 1e9)
+            require(offset_ns % self.dt_ns == 0,
+                    f"filter.rate_matching needs the master's validity times on the IMU grid: master.latency_s = "
+                    f"{self.master.latency_s:g} s less filter.master_latency_s = {f.master_latency_s:g} s is "
+                    f"{offset_ns} ns, not a multiple of the IMU interval {self.dt_ns} ns ({why})")
+        if f.lever_arm_treatment == 'butterworth' and given('filter', 'master.rate_hz', 'rate_hz'):
+            require(every == 1,
+                    f"filter.lever_arm_treatment butterworth: its low-pass is designed at the IMU rate (rate_hz = "
+                    f"{self.rate_hz:g} Hz) but stepped once per master match, so master.rate_hz = "
+                    f"{self.master.rate_hz:g} Hz would move its cutoff from {f.butterworth_cutoff_hz:g} Hz to "
+                    f"{f.butterworth_cutoff_hz / every:g} Hz: give master.rate_hz 0 (the scenario rate) or use "
+                    f"compensation")
+
+    def moves_on_deck(self) -> str:
+        """Why the aircraft moves relative to the deck during the run ('' if it does not): an
+        airborne start, or a catapult launch (or its hold-back creep) before the end."""
+        if self.aircraft.flight.start == 'airborne':
+            return "aircraft.flight.start is airborne (the aircraft is off the deck)"
+        cat = self.aircraft.catapult
+        start = cat.launch_time_s - (cat.holdback_s if cat.holdback_stretch_m > 0.0 else 0.0)
+        if cat.enabled and start < self.duration_s:
+            return (f"the catapult moves the aircraft from {start:g} s (aircraft.catapult.launch_time_s = "
+                    f"{cat.launch_time_s:g} s), inside duration_s = {self.duration_s:g} s")
+        return ''
 
     @property
     def dt_ns(self) -> int:

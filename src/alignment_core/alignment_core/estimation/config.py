@@ -2,6 +2,7 @@
 the model x algorithm x option combinations the engine can run (docs/engine.md)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -14,6 +15,13 @@ NONLINEAR_ALGORITHMS = ('ekf', 'ukf', 'ckf')
 ATTITUDE_MODELS = ('seed003_21', 'seed003_24')               # attitude-match rows and mounting states
 RATE_MODELS = ('vm12', 'vm15', 'seed003_21', 'seed003_24')   # phi and eps states: rate matching
 BEAM_MODELS = ('vm12', 'vm15', 'seed000_6', 'seed003_21', 'seed003_24')   # linear, three velocity rows first
+MASTER_ATTITUDE_MODELS = ('vm15', 'seed003_24')              # master attitude states phi_m
+# inflate the whole covariance by a fading factor: with a beam LDV's one row the unobserved
+# directions grow without bound (fading only when fading_factor > 1; docs/engine.md)
+FADING_ALGORITHMS = ('stf', 'stf_multiple', 'fading', 'fading_tested', 'combined')
+DECK_SPOT_HORIZONTAL_M = 200.0    # a lever arm's bounds, as aircraft.lever_arm_m's (aircraft_config.py)
+DECK_SPOT_VERTICAL_M = 50.0
+OUTPUT_RATE_MAX_HZ = 1e9          # an output period of at least 1 ns (engine.py counts it in whole ns)
 
 
 @dataclass(frozen=True)
@@ -135,6 +143,14 @@ class FilterConfig:
         require(0.1 <= self.reference_force_window_s <= 10.0,
                 f"reference_force_window_s must be in [0.1, 10] s, got {self.reference_force_window_s}")
         require(self.max_gap_factor > 1.0, f"max_gap_factor must be > 1, got {self.max_gap_factor}")
+        require(self.output_rate_hz <= OUTPUT_RATE_MAX_HZ,
+                f"output_rate_hz must be <= {OUTPUT_RATE_MAX_HZ:g} Hz (a period of at least 1 ns; outputs come "
+                f"at master stamps, so a rate at or above the master's gives one at every master sample), "
+                f"got {self.output_rate_hz}")
+        r = self.lever_arm_m
+        require(math.hypot(r[0], r[1]) <= DECK_SPOT_HORIZONTAL_M and abs(r[2]) <= DECK_SPOT_VERTICAL_M,
+                f"lever_arm_m out of range (|horizontal| <= {DECK_SPOT_HORIZONTAL_M:g} m, "
+                f"|z| <= {DECK_SPOT_VERTICAL_M:g} m): {self.lever_arm_m}")
         self.validate_monitoring()
         require(-180.0 <= self.heading_on_deck_deg <= 180.0,
                 f"heading_on_deck_deg must be in [-180, 180], got {self.heading_on_deck_deg}")
@@ -154,6 +170,12 @@ class FilterConfig:
                   'doppler_drift_sigma_arcmin', 'rate_match_sigma_dph', 'master_delay_sigma_ms'):
             require(getattr(self, k) > 0.0, f"{k} must be > 0, got {getattr(self, k)}")
         require(self.init_yaw_sigma_deg >= 0.0, f"init_yaw_sigma_deg must be >= 0, got {self.init_yaw_sigma_deg}")
+        for k in ('master_tilt_sigma_arcmin', 'master_heading_sigma_arcmin'):
+            if self.model in MASTER_ATTITUDE_MODELS:
+                require(getattr(self, k) > 0.0, f"{k} must be > 0 (the prior of {self.model}'s master attitude "
+                                                f"states), got {getattr(self, k)}")
+            else:
+                require(getattr(self, k) >= 0.0, f"{k} must be >= 0, got {getattr(self, k)}")
         require(not self.flexure_states or all(v > 0.0 for v in self.flexure_sigma_arcmin + self.flexure_tau_s),
                 f"flexure_sigma_arcmin and flexure_tau_s must be > 0, got {self.flexure_sigma_arcmin}, "
                 f"{self.flexure_tau_s}")
@@ -182,11 +204,18 @@ class FilterConfig:
 
     def validate_ldv_mode(self) -> None:
         """A beam LDV's one row projects the three velocity rows on the line of sight
-        (models/beam.py): a linear model whose first three rows are E, N, U velocity."""
+        (models/beam.py): a linear model whose first three rows are E, N, U velocity, and no
+        fading of the whole covariance (the directions the row leaves unobserved would grow)."""
         require(self.ldv_mode in ('vector', 'beam'), f"ldv_mode must be 'vector' or 'beam', got {self.ldv_mode!r}")
         require(self.ldv_mode == 'vector' or self.model in BEAM_MODELS,
                 f"ldv_mode beam projects the three velocity rows on the beam: it needs one of "
                 f"{', '.join(BEAM_MODELS)}, got {self.model}")
+        fades = self.algorithm in FADING_ALGORITHMS and (self.algorithm != 'fading' or self.fading_factor > 1.0)
+        require(self.ldv_mode == 'vector' or not fades,
+                f"algorithm {self.algorithm} cannot run with ldv_mode beam: its fading factor inflates the whole "
+                f"covariance while the beam's one row leaves directions unobserved, which then grow without bound "
+                f"(the estimate diverges while the level stays OK); use kf, carlson, ud, ekf, ukf or ckf"
+                + (f" (or fading_factor 1, got {self.fading_factor})" if self.algorithm == 'fading' else ''))
 
     def validate_monitoring(self) -> None:
         """Plausibility limits, gap handling, the gate and the consistency monitor."""

@@ -48,9 +48,16 @@ from alignment_core.rng import stage_rng
 from alignment_core.samples import MasterSample, ShipBatch, ShipSample
 from alignment_core.sensors.timing import SensorTiming
 from alignment_core.units import DEG, DPH, UG
-from alignment_core.validation import require
+from alignment_core.validation import ConfigError, require
 
 STATE_LABELS = ('phi_E', 'phi_N', 'phi_U', 'dv_E', 'dv_N')
+VAN_LOAN_MAX_EXPONENT = 18.0
+"""The largest a t of an `initial: aligned` covariance (a: the damped loop's fastest decay rate):
+discretise's Van Loan block holds expm(-F t), which grows as exp(a t), and Qd = Phi times it
+cancels that growth, losing about a t / ln 10 of float64's 16 digits. Measured (lat 0-70 deg,
+damping_ratio 0.1-2, tau 60 s - 1e6 s) against P_inf - Phi P_inf Phi^T: within 1e-4 at a t = 18,
+every digit lost by a t ~ 35, overflow (LinAlgError) at ~ 710. MasterConfig.validate_at refuses
+older ages."""
 
 
 @dataclass(frozen=True)
@@ -87,7 +94,7 @@ class MasterConfig:
         require(0.0 <= self.aligned_ago_s <= 30 * 86400.0,
                 f"aligned_ago_s must be in [0, 30 days], got {self.aligned_ago_s}")
         require(not (self.model == 'schuler' and self.damping == 'none' and self.initial == 'settled'),
-                "master.initial: 'settled' needs damping 'velocity' (a free INS has no steady "
+                "initial: 'settled' needs damping 'velocity' (a free INS has no steady "
                 "state); use initial: aligned")
         require(0.0 <= self.rate_hz <= 2000.0, f"rate_hz must be in [0, 2000], got {self.rate_hz}")
         require(0.0 <= self.latency_s <= 1.0, f"latency_s must be in [0, 1] s, got {self.latency_s}")
@@ -97,6 +104,31 @@ class MasterConfig:
                 f"noise_change_at_s must be >= 0 (0 = never), got {self.noise_change_at_s}")
         require(0.0 <= self.noise_change_factor <= 1000.0,
                 f"noise_change_factor must be in [0, 1000], got {self.noise_change_factor}")
+
+    def validate_at(self, lat_deg: float) -> None:
+        """The 'schuler' model at the ship's latitude (the scenario's check, which knows it): the
+        error dynamics exist there (error_dynamics' own test), and an `initial: aligned` noise
+        covariance can be computed for aligned_ago_s (VAN_LOAN_MAX_EXPONENT)."""
+        if self.model != 'schuler':
+            return
+        try:
+            f, _ = error_dynamics(lat_deg * DEG, self.damping, self.damping_ratio, self.gyrocompass_tau_s)
+        except ValueError as e:
+            raise ConfigError(f"ship.lat_deg = {lat_deg} is out of range for master.model schuler with damping "
+                              f"{self.damping}: {e}") from None
+        if self.initial != 'aligned' or not (self.arw_dpsh > 0.0 or self.vrw_ugpshz > 0.0):
+            return
+        rates = -np.linalg.eigvals(f).real
+        fastest, slowest = float(rates.max()), float(rates.min())
+        if fastest <= 0.0:
+            return
+        limit = VAN_LOAN_MAX_EXPONENT / fastest
+        require(self.aligned_ago_s <= limit,
+                f"master.aligned_ago_s = {self.aligned_ago_s:g} s is beyond {limit:.0f} s, the largest age allowed "
+                f"with damping_ratio {self.damping_ratio:g} and gyrocompass_tau_s {self.gyrocompass_tau_s:g} s at "
+                f"{lat_deg:g} deg: the noise covariance's discretisation grows as exp(t / {1.0 / fastest:.0f} s) "
+                f"and loses its precision beyond exp({VAN_LOAN_MAX_EXPONENT:g}); by then the loop's slowest mode has "
+                f"decayed to {np.exp(-slowest * limit):.2g} of its start (initial: settled is the limit)")
 
 
 def error_dynamics(lat: float, damping: str = 'velocity', zeta: float = 0.5,

@@ -3,8 +3,11 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, cast
 
+import numpy as np
+
+from alignment_core.ship import sea_state, wave_spectrum
 from alignment_core.validation import require
 
 # seed 002, Table 3: amplitudes (deg) roll, pitch, yaw by sea state
@@ -39,6 +42,17 @@ def _paper_amplitudes() -> dict[int, tuple[float, float, float]]:
 PAPER_AMPLITUDE_DEG = _paper_amplitudes()
 
 
+class _Quantile:
+    """Stands in for sea_state.resolve's random stream: every draw at quantile `u` (0 and 1 give
+    the ends of the ranges a sea_draw draws from)."""
+
+    def __init__(self, u: float) -> None:
+        self.u = u
+
+    def uniform(self) -> float:
+        return self.u
+
+
 @dataclass(frozen=True)
 class ShipConfig:
     """Ship scenario: course, speed, start position and the sea.
@@ -49,7 +63,8 @@ class ShipConfig:
     `spectrum` ITTC (Bretschneider) or JONSWAP (`jonswap_gamma`); `spreading` 'none'
     (long-crested) or 'cos2' over `n_directions`; `wave_heading_deg` is the direction the
     waves travel relative to the bow, clockwise (180 = head seas, 90 = waves from port,
-    0 = following); `n_frequencies` log-spaced bins on `omega_min`..`omega_max` rad/s (0 = auto);
+    0 = following); `n_frequencies` log-spaced bins on `omega_min`..`omega_max` rad/s (0 = auto:
+    the default band of Tp; one edge given alone must leave it non-empty for every Tp of the sea);
     `rao_source` 'closed_form' (a 310 m carrier, `rao.CarrierParams`, with `roll_period_s` and
     `roll_zeta` (0 = 0.05 at 0 kn to 0.10 at 30 kn)) or a path to an MSS vessel .mat file;
     `course_keeping` 'straight' (constant course and speed) or 'mmg': the low-frequency
@@ -145,7 +160,36 @@ class ShipConfig:
         if self.course_keeping == 'mmg':
             require(self.speed_kn >= 1.0, f"speed_kn must be >= 1 with course_keeping 'mmg' (the MMG "
                                           f"model is a manoeuvring model at speed), got {self.speed_kn}")
+        if self.mode == 'spectral' and (self.omega_min == 0.0) != (self.omega_max == 0.0):
+            self.validate_band()
         if self.mode == 'spectral' and self.rao_source != 'closed_form':
             path = os.path.expandvars(os.path.expanduser(self.rao_source))
             require(os.path.isfile(path), f"rao_source: RAO file not found: {self.rao_source!r} "
                                           f"(give 'closed_form' or the path of an MSS vessel .mat file)")
+
+    def peak_periods(self) -> tuple[float, float]:
+        """The shortest and longest peak period Tp (s) the sea can have: sea_state.resolve's, or
+        the ends of its draw's range under sea_draw."""
+        if not self.sea_draw:
+            tp = sea_state.resolve(self.sea_state, self.hs_m, self.tp_s).tp_s
+            return tp, tp
+        ends = [sea_state.resolve(self.sea_state, self.hs_m, self.tp_s, cast(np.random.Generator, _Quantile(u))).tp_s
+                for u in (0.0, 1.0)]
+        return min(ends), max(ends)
+
+    def validate_band(self) -> None:
+        """One of omega_min / omega_max given, the other automatic (wave_spectrum.default_band of
+        Tp, both edges falling as Tp grows): the band must be non-empty for every Tp of the sea."""
+        tp_lo, tp_hi = self.peak_periods()
+        if self.omega_min > 0.0:
+            hi = wave_spectrum.default_band(tp_hi)[1]
+            require(self.omega_min < hi,
+                    f"omega_min = {self.omega_min} rad/s must be below omega_max, automatic here: {hi:.4g} rad/s "
+                    f"(the default band's upper edge at Tp {tp_hi:.4g} s, sea_state {self.sea_state}); "
+                    f"give omega_max too")
+        else:
+            lo = wave_spectrum.default_band(tp_lo)[0]
+            require(self.omega_max > lo,
+                    f"omega_max = {self.omega_max} rad/s must be above omega_min, automatic here: {lo:.4g} rad/s "
+                    f"(the default band's lower edge at Tp {tp_lo:.4g} s, sea_state {self.sea_state}); "
+                    f"give omega_min too")

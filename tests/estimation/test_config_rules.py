@@ -1,0 +1,71 @@
+"""FilterConfig refuses at load what would otherwise break a run deep in the engine: an output
+period below 1 ns, a master attitude prior of zero, a lever arm off any ship, and a fading
+filter with a beam LDV (docs/engine.md's matrix)."""
+from __future__ import annotations
+
+import pytest
+
+from alignment_core.config import scenario
+from alignment_core.estimation.config import FADING_ALGORITHMS, FilterConfig
+from alignment_core.validation import ConfigError, build
+
+
+def _filter(**values: object) -> FilterConfig:
+    return build(FilterConfig, values, 'filter')
+
+
+def test_an_output_period_below_one_nanosecond_is_refused():
+    """engine.py counts the output period in whole ns: 1e12 Hz rounded it to 0 (ZeroDivisionError
+    at the first master sample); a rate above the master's is kept (every master sample)."""
+    with pytest.raises(ConfigError, match=r"^filter: output_rate_hz must be <= 1e\+09 Hz .*got 1000000000000.0$"):
+        _filter(output_rate_hz=1e12)
+    assert _filter(output_rate_hz=1e9).output_rate_hz == 1e9
+
+
+@pytest.mark.parametrize('key', ['master_tilt_sigma_arcmin', 'master_heading_sigma_arcmin'])
+@pytest.mark.parametrize('model', ['vm15', 'seed003_24'])
+def test_master_attitude_priors_must_be_positive_where_the_model_has_those_states(key, model):
+    for value in (0.0, -0.5):
+        with pytest.raises(ConfigError, match=rf"^filter: {key} must be > 0 \(the prior of {model}'s master "
+                                              rf"attitude states\), got {value}$"):
+            _filter(model=model, **{key: value})
+
+
+def test_master_attitude_priors_unused_may_be_zero_but_not_negative():
+    assert _filter(model='vm12', master_tilt_sigma_arcmin=0.0).master_tilt_sigma_arcmin == 0.0
+    with pytest.raises(ConfigError, match=r"master_heading_sigma_arcmin must be >= 0, got -1.0"):
+        _filter(model='vm12', master_heading_sigma_arcmin=-1.0)
+
+
+@pytest.mark.parametrize('arm', [[1e4, 0.0, 0.0], [150.0, 150.0, 0.0], [0.0, 0.0, -60.0]])
+def test_the_filter_lever_arm_has_the_aircraft_lever_arms_bounds(arm):
+    with pytest.raises(ConfigError, match=r"^filter: lever_arm_m out of range \(\|horizontal\| <= 200 m, "
+                                          r"\|z\| <= 50 m\)"):
+        scenario.load('catapult_paper', {'filter.lever_arm_m': arm})
+    with pytest.raises(ConfigError, match=r"^aircraft: lever_arm_m out of range"):
+        scenario.load('catapult_paper', {'aircraft.lever_arm_m': arm})
+    assert _filter(lever_arm_m=(199.0, 0.0, 50.0)).lever_arm_m == (199.0, 0.0, 50.0)
+
+
+@pytest.mark.parametrize('algorithm', ['stf', 'stf_multiple', 'fading_tested', 'combined'])
+def test_fading_filters_with_a_beam_ldv_are_refused(algorithm):
+    """deck_paper, ldv.mode beam, 30 s, seeds 1-3: these diverge (tens of degrees, stf 57 deg at
+    0.5 s on seed 1) with the level OK, where kf, carlson, ud, ekf, ukf, ckf end within 0.04 deg."""
+    with pytest.raises(ConfigError, match=rf"^filter: algorithm {algorithm} cannot run with ldv_mode beam: its "
+                                          rf"fading factor inflates the whole covariance"):
+        scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.algorithm': algorithm})
+    assert scenario.load('deck_paper', {'filter.algorithm': algorithm}).filter.algorithm == algorithm
+
+
+def test_a_fixed_fading_factor_above_one_with_a_beam_ldv_is_refused():
+    """fading_factor 1 is the kf; 1.01 diverges within 30 s, 1.001 reaches 1 deg at 300 s."""
+    with pytest.raises(ConfigError, match=r"algorithm fading cannot run with ldv_mode beam.*\(or fading_factor 1, "
+                                          r"got 1.001\)$"):
+        scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.algorithm': 'fading', 'filter.fading_factor': 1.001})
+    assert scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.algorithm': 'fading'}).filter.fading_factor == 1.0
+
+
+@pytest.mark.parametrize('algorithm', ['kf', 'carlson', 'ud', 'ekf', 'ukf', 'ckf'])
+def test_the_other_algorithms_run_a_beam_ldv(algorithm):
+    assert algorithm not in FADING_ALGORITHMS
+    assert scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.algorithm': algorithm}).filter.ldv_mode == 'beam'
