@@ -177,3 +177,39 @@ def test_the_felt_check_integrates_specific_force_against_the_parked_baseline():
     assert dec.launch_ns == t_launch + 10 * ms
     dv = 19.6133 * 0.29                                    # 2 g over the intervals ending (1.91 s, 2.29 s]
     assert d.felt_margin_mps == pytest.approx(dv - (0.5 * 0.588 - 0.2), rel=1e-9)
+
+
+def _stroke_seen_late(blind_from_s: float | None, accel: float, ldv_accel: float = 19.6133) -> LaunchDetector:
+    """The detector alone: parked at a 0.5 m/s^2 offset, the IMU feeling `accel` along x from 2.0 s,
+    fed to 3.0 s; the LDV valid and parked up to `blind_from_s` (None: never valid), then blind
+    until it first sees the aircraft at 2.5 s, at the speed a `ldv_accel` stroke reaches then."""
+    d = LaunchDetector(LaunchThresholds(0.05, 3, 0.0, 25, 0, 0.5, 0.2))
+    ms = 1_000_000
+    for k in range(1, 301):             # in stamp order, as the engine feeds it: the IMU, then the LDV
+        t = k * 10 * ms
+        d.observe_imu(t, 0.5 + (accel if t > 2000 * ms else 0.0), 0.01)
+        if t >= 2500 * ms:
+            v = ldv_accel * (t - 2000 * ms) * 1e-9
+            d.observe(LdvSample(t, np.array([v, 0.0, 0.0]), 0.01, True))
+        else:
+            seen = blind_from_s is not None and t < blind_from_s * 1e9
+            d.observe(LdvSample(t, np.zeros(3), 0.01 if seen else float('nan'), seen))
+    return d
+
+
+@pytest.mark.parametrize('blind_from_s', [1.0, None])
+def test_a_stroke_the_ldv_first_sees_halfway_is_felt_from_where_it_went_blind(blind_from_s):
+    """2 g from 2.0 s, the LDV blind from 1.0 s (a dropout) or never valid (out of range at the
+    spot) until 2.5 s, when the aircraft already does 9.8 m/s: the accelerometers felt the whole
+    9.8 m/s since the LDV last saw it parked, not the 0.1 s before its first fast sample (that
+    check released the stroke as parked, and the matches took a 10 m/s innovation as the deck's)."""
+    d = _stroke_seen_late(blind_from_s, 19.6133)
+    assert d.moving and d.t_launch_ns == 2500 * 1_000_000
+    assert d.felt_margin_mps > 0.0
+
+
+def test_after_a_blind_spell_an_ldv_reading_the_imu_did_not_feel_is_still_not_a_launch():
+    """The same LDV (blind from 1.0 s, then 'fast' from 2.5 s) on a deck that never moved: the
+    accelerometers felt nothing since the LDV last saw the aircraft parked, so no launch."""
+    d = _stroke_seen_late(1.0, 0.0, ldv_accel=19.6133)
+    assert not d.moving and d.t_launch_ns is None

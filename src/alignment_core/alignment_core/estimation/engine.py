@@ -96,9 +96,13 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._q_launch = np.diag(dv) * cfg.launch_accel_noise_mps2 ** 2 if cfg.launch_accel_noise_mps2 > 0.0 else None
         self._live: LiveSolution | None = None
         self._anchor_from: int | None = None      # after a gap on the deck: re-anchor at the first master from here
+        self._imu_start: int | None = None        # where the IMU's data begins: its first stamp less an interval
+        self._init_from: int | None = None        # a told latency reaching before it: initialise from here
         self._next_out: int | None = None         # the next output at or after this master stamp
+        self._t_first_master: int | None = None   # the IMU cannot have been silent before it
         self._deck_disp = np.zeros(3)
         self._last_ldv: LdvSample | None = None
+        self._last_valid_ldv: tuple[LdvSample, bool] | None = None    # (sample, recorded moving)
         self._matching = False
         self._health = status.Health()
         self._monitor = NisMonitor(cfg.consistency_window_updates, cfg.consistency_warn_p,
@@ -204,15 +208,21 @@ class TransferAlignment(ImuEvents, EngineViews):
 
     def _record_ldv(self, s: LdvSample) -> None:
         """Integrate the deck displacement (when moving) and keep the sample by validity time; a
-        beam sample, once moving, as the run along the track it implies (models/beam.py)."""
+        beam sample, once moving, as the run along the track it implies (models/beam.py). Invalid
+        samples while moving (a dropout in the stroke) are bridged by the trapezoid between the
+        valid samples around them, exact for a constant acceleration: the run they hid still
+        moved the aircraft along the deck."""
         t = s.t_ns
         moving = self._launch.moving
         if moving and s.valid and s.beam is not None:
             s = replace(s, v_s=track_velocity(s.v_s, s.beam, self._cfg.heading_on_deck_deg * DEG))
-        prev = self._last_ldv
-        if moving and s.valid and prev is not None and prev.valid:
+        last = self._last_valid_ldv
+        if moving and s.valid and last is not None and (last[1] or last[0] is self._last_ldv):
+            prev = last[0]
             self._deck_disp = self._deck_disp + 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
         self._last_ldv = s
+        if s.valid:
+            self._last_valid_ldv = (s, moving)
         self._ldv_history.record(LdvRecord(t - self._ldv_lat_ns, s.v_s, s.valid, moving, self._deck_disp,
                                            beam=s.beam))
 
@@ -251,7 +261,7 @@ class TransferAlignment(ImuEvents, EngineViews):
         reached that time (at once when nothing is late); emit at the output rate."""
         self._counters.master += 1
         if self._next_out is None:
-            self._next_out = t
+            self._next_out = self._t_first_master = t
         if self._t_master is not None:
             self._master_spacing_ns = t - self._t_master
         self._t_master = t
@@ -269,6 +279,10 @@ class TransferAlignment(ImuEvents, EngineViews):
             if anchor_from is not None and t_v < anchor_from:      # inside the gap: no slave solution there
                 self._pending.popleft()
                 self._counters.unmatched_master += 1
+                continue
+            if self._live is None and self._before_imu_data(t_v):     # no IMU data there: not a start
+                self._pending.popleft()
+                self._counters.skipped_before_init += 1
                 continue
             if not final:
                 latest = self._ldv_history.latest_ns
@@ -350,8 +364,11 @@ class TransferAlignment(ImuEvents, EngineViews):
         if self._health.running:
             odo = self._maker.keep(live, self._results)
             if odo is None:
-                self._fail('covariance not finite at the output')
-        level, flags = status.with_lag(*status.level_and_flags(self._health, self._monitor), t - live.t_ns,
+                self._fail('output not finite (covariance, misalignment or odometry)')
+        # the IMU's silence: since the slave's time, or the data's start for a slave initialised
+        # before it (at a told master latency), which is no silence
+        since = live.t_ns if self._t_first_master is None else max(live.t_ns, self._t_first_master)
+        level, flags = status.with_lag(*status.level_and_flags(self._health, self._monitor), t - since,
                                        self._bridge_ns, int(self._cfg.gap_error_s * 1e9))
         e = self._maker.make(t, live, self._results, self._counters.updates, self._matching, level, flags,
                              t_valid=self._valid_at(t), odometry=odo)

@@ -39,6 +39,8 @@ class ImuEvents:
     _live: LiveSolution | None
     _matching: bool
     _anchor_from: int | None
+    _imu_start: int | None
+    _init_from: int | None
     _imu_buffer: deque[ImuSample]
     _pending: deque
     _t_imu: int | None
@@ -66,6 +68,9 @@ class ImuEvents:
 
     def _on_imu(self, t: int, s: ImuSample) -> None:
         self._counters.imu += 1
+        first = self._t_imu is None
+        if first:
+            self._imu_start = t - self._imu_dt_ns      # the first sample covers (t - dt, t]
         if self._launch.t_launch_ns is None:            # the launch detector feels the stroke
             h = self._imu_dt_nominal if self._t_imu is None else (t - self._t_imu) * 1e-9
             self._launch.observe_imu(t, float(s.accel[0]), h)
@@ -80,6 +85,9 @@ class ImuEvents:
             self._counters.skipped_before_init += 1
             return
         if t - live.t_ns > self._bridge_ns:
+            if first:                                  # the slave started before the IMU's data
+                self._start_again(t, s)
+                return
             self._bridge(live, t)
             if self._anchor_from is not None:
                 self._buffer_imu(t, s)
@@ -88,6 +96,29 @@ class ImuEvents:
         self._propagate(live, t, s)
         if self._pending:
             self._match_pending()
+
+    def _before_imu_data(self, t_v: int) -> bool:
+        """Before initialisation: is the master valid at t_v too early to start the slave? A told
+        master latency that puts t_v more than the bridge limit before the IMU's first sample
+        would make the slave's first step a gap the IMU stream does not have; then the slave
+        starts at the first master valid where the IMU's data begins (docs/engine.md,
+        initialisation). Nearer ones start it as before (one longer first step)."""
+        start = self._imu_start
+        if start is None:
+            return False
+        if self._init_from is None and start + self._imu_dt_ns - t_v > self._bridge_ns:
+            self._init_from = start
+        return self._init_from is not None and t_v < self._init_from
+
+    def _start_again(self, t: int, s: ImuSample) -> None:
+        """The slave was initialised (before any IMU sample) at a master validity time more than
+        the bridge limit before the IMU's first sample, t: no IMU gap to bridge or flag, and no
+        step taken yet, so it is dropped and started again at the first master valid where the
+        IMU's data begins (`_before_imu_data`); the sample waits in the buffer for it."""
+        self._live = None
+        self._init_from = self._imu_start
+        self._buffer_imu(t, s)
+        self._match_pending()
 
     def _buffer_imu(self, t: int, s: ImuSample) -> None:
         """Keep the IMU sample for the (re-)anchoring master; drop those older than the span."""

@@ -39,7 +39,8 @@ class LaunchThresholds:
 
 FELT_MARGIN_NS = 100_000_000          # the IMU's velocity change is summed from 0.1 s before the run
 FELT_BASE_NS = 1_000_000_000          # against the mean specific force over the second before that
-FELT_SPAN_NS = 4_000_000_000          # IMU intervals kept for the check
+FELT_BLIND_NS = 10_000_000_000        # an LDV blind before a run: the run began at most this long before it
+FELT_SPAN_NS = FELT_BLIND_NS + FELT_MARGIN_NS + FELT_BASE_NS + 1_000_000_000   # IMU intervals kept for the check
 
 
 class LaunchDetector:
@@ -61,6 +62,10 @@ class LaunchDetector:
         self._recent_sum = np.zeros(3)         # running sum of _recent (a cheap trigger for the median)
         self._imu: deque[tuple[int, float, float]] = deque()   # (t_end, specific force along x, h)
         self.felt_margin_mps = np.inf          # the last check's velocity change minus what it needed
+        self._last_valid_v: int | None = None  # validity time of the last valid LDV sample (the first
+                                               # sample's, valid or not, until one is valid)
+        self._blind = True                     # the last LDV sample was invalid (or none was valid yet)
+        self._run_from = 0                     # the earliest validity time the run being checked began
 
     @property
     def moving(self) -> bool:
@@ -83,12 +88,20 @@ class LaunchDetector:
         while q[0][0] < t_ns - FELT_SPAN_NS:
             q.popleft()
 
+    def _start_run(self, t_v: int, was_blind: bool, since: int) -> None:
+        """A run of fast samples starts with the one valid at t_v. If the LDV saw nothing valid just
+        before it (a dropout; out of range at the spot since its first sample), the motion may
+        have begun in the blind time: from `since`, at most FELT_BLIND_NS earlier."""
+        self._run_from = max(since, t_v - FELT_BLIND_NS) if was_blind else t_v
+
     def _felt(self, t_v: int, speed: float) -> bool:
         """Did the accelerometers feel a run that started at validity time t_v and reached `speed`
         (relative to the motion before it)? The velocity change along x summed from FELT_MARGIN
         before t_v, less the mean specific force of the second before that (gravity on the pitched
         deck, the deck's own acceleration), must reach felt_fraction speed - felt_tolerance. A run
-        the IMU cannot have seen yet (no intervals) is not held against the LDV."""
+        the IMU cannot have seen yet (no intervals) is not held against the LDV. t_v is the
+        earliest time the run may have begun (`_start_run`): a stroke the LDV first sees halfway
+        must not be taken for a reading the IMU never felt."""
         lim = self.limits
         need = lim.felt_fraction * speed - lim.felt_tolerance_mps
         if lim.felt_fraction <= 0.0 or need <= 0.0 or not self._imu:
@@ -114,7 +127,13 @@ class LaunchDetector:
         lim = self.limits
         speed = math.sqrt(float(s.v_s @ s.v_s)) if s.valid else 0.0
         fast = speed > lim.launch_mps
+        valid_at = s.t_ns - lim.ldv_latency_ns
+        if self._last_valid_v is None:
+            self._last_valid_v = valid_at
+        was_blind, since = self._blind, self._last_valid_v
+        self._blind = not s.valid
         if s.valid:
+            self._last_valid_v = valid_at
             rl = self._recent
             if len(rl) == rl.maxlen:
                 self._recent_sum -= rl[0]
@@ -124,10 +143,12 @@ class LaunchDetector:
         if self._moving and self._t_launch is None:     # creeping: watch for the stroke
             median = self._median_speed()
             if s.valid and speed > lim.launch_mps + median:
+                if not self._fast_run:
+                    self._start_run(valid_at, was_blind, since)
                 self._fast_run.append(s.t_ns)
                 if len(self._fast_run) >= lim.confirm_samples:
                     t_v = self._fast_run[0] - lim.ldv_latency_ns
-                    if not self._felt(t_v, speed - median):
+                    if not self._felt(self._run_from, speed - median):
                         self._fast_run.clear()
                         return LdvDecision((s,), None, False, True)
                     launch = self._launch(t_v)
@@ -137,13 +158,15 @@ class LaunchDetector:
             return LdvDecision((s,), launch)
         creep = False
         if fast or (self._held and not s.valid):
+            if not self._held:
+                self._start_run(valid_at, was_blind, since)
             self._held.append(s)
             self._held_fast += fast
             if self._held_fast < lim.confirm_samples:
                 return LdvDecision()
             t_v = self._held[0].t_ns - lim.ldv_latency_ns
             top = max(float(np.sqrt(h.v_s @ h.v_s)) for h in self._held if h.valid)
-            if not self._felt(t_v, top):
+            if not self._felt(self._run_from, top):
                 return LdvDecision(self.release(), None, False, True)   # recorded as parked
             launch = self._launch(t_v)
         elif self._creeping():

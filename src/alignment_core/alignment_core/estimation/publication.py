@@ -95,13 +95,16 @@ class EstimateMaker:
 
     def keep(self, live: LiveSolution, res: MatchResults) -> Odometry | None:
         """Keep the live covariance for the next output (and as the held one) and return the live
-        odometry (for `make` at the same instant); None if the covariance or the published
-        misalignment is not finite (a breakdown)."""
+        odometry (for `make` at the same instant); None if the covariance, the published
+        misalignment or the odometry (position, velocity, rate, their covariances) is not finite:
+        a non-finite output is a breakdown (docs/engine.md), never an output at OK."""
         att, p = self._model.attitude, live.kf.P
         cov, sigma = p[att, att].copy(), np.sqrt(np.diag(p))
         if not (finite(cov, sigma) and finite(res.mu, res.mu_sigma)):
             return None
         odo = self._odometry.make(live.ins.s, p, live.gyro, res.corr.bg)
+        if not finite(odo.p_w, odo.v_b, odo.w_b, odo.pose_cov, odo.twist_cov):
+            return None
         self.held = (cov, sigma, live.kf.diagnostics(), odo.pose_cov, odo.twist_cov)
         self.held_state = self.state.values(live.kf.x, res.corr)
         return odo

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from alignment_core.estimation.consistency import NisMonitor
+from alignment_core.estimation.consistency import NisMonitor, WindowResult
 from alignment_core.estimation.health import ERROR, OK, WARN
 from alignment_core.estimation.outputs import Counters, Report
 
@@ -21,11 +21,17 @@ class Health:
     gap_level: int = OK               # WARN / ERROR after a bridged IMU gap, until re-converged
     gap_s: float = 0.0                # the last bridged gap, s
     recover_mark: int = 0             # NIS windows completed when the gap was bridged
+    # the consistency ERROR's cause, kept as it was when it struck (the monitor's count and last
+    # window move on; the ERROR persists): the failing windows in a row and the last of them
+    inconsistent: tuple[int, WindowResult] | None = None
 
     def window_done(self, monitor: NisMonitor, failed: bool) -> None:
-        """A NIS window completed: one that passed, entirely after the gap, ends the gap's level."""
+        """A NIS window completed: one that passed, entirely after the gap, ends the gap's level;
+        the window that puts the monitor at ERROR is kept as the failure's reason."""
         if self.gap_level and not failed and monitor.completed > self.recover_mark:
             self.gap_level = OK
+        if failed and self.inconsistent is None and monitor.level == ERROR and monitor.last is not None:
+            self.inconsistent = (monitor.fails_in_row, monitor.last)
 
 
 def level_and_flags(h: Health, monitor: NisMonitor) -> tuple[int, tuple[str, ...]]:
@@ -77,10 +83,15 @@ def failure(h: Health, monitor: NisMonitor) -> str:
     """Why the estimate is not healthy ('' while it is)."""
     if not h.running:
         return h.failure
-    if monitor.level == ERROR and monitor.last is not None:
-        r = monitor.last
-        return (f'inconsistent with its data: {monitor.fails_in_row} NIS windows in a row above the bound '
-                f'(last mean {r.mean_per_dof:.3g} per dof, bound {r.bound / r.dof:.3g})')
+    if monitor.level == ERROR:
+        # the windows that made it fail, not the monitor's count now (0 once a window passes)
+        cause = h.inconsistent
+        if cause is None and monitor.last is not None:      # a Health that saw no window (tests)
+            cause = (monitor.fails_in_row, monitor.last)
+        if cause is not None:
+            n, r = cause
+            return (f'inconsistent with its data: {n} NIS windows in a row above the bound '
+                    f'(the last of them: mean {r.mean_per_dof:.3g} per dof, bound {r.bound / r.dof:.3g})')
     if h.gap_level == ERROR:
         return f'IMU gap of {h.gap_s:.3g} s: not re-converged yet'
     return ''
