@@ -52,12 +52,12 @@ from alignment_core.validation import ConfigError, require
 
 STATE_LABELS = ('phi_E', 'phi_N', 'phi_U', 'dv_E', 'dv_N')
 VAN_LOAN_MAX_EXPONENT = 18.0
-"""The largest a t of an `initial: aligned` covariance (a: the damped loop's fastest decay rate):
-discretise's Van Loan block holds expm(-F t), which grows as exp(a t), and Qd = Phi times it
+"""The largest a t the Van Loan form serves an `initial: aligned` covariance (a: the damped loop's
+fastest decay rate): its block holds expm(-F t), which grows as exp(a t), and Qd = Phi times it
 cancels that growth, losing about a t / ln 10 of float64's 16 digits. Measured (lat 0-70 deg,
 damping_ratio 0.1-2, tau 60 s - 1e6 s) against P_inf - Phi P_inf Phi^T: within 1e-4 at a t = 18,
-every digit lost by a t ~ 35, overflow (LinAlgError) at ~ 710. MasterConfig.validate_at refuses
-older ages."""
+every digit lost by a t ~ 35, overflow (LinAlgError) at ~ 710. Older ages take the stable form
+(`aligned_since`)."""
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,8 @@ class MasterConfig:
     def validate_at(self, lat_deg: float) -> None:
         """The 'schuler' model at the ship's latitude (the scenario's check, which knows it): the
         error dynamics exist there (error_dynamics' own test), and an `initial: aligned` noise
-        covariance can be computed for aligned_ago_s (VAN_LOAN_MAX_EXPONENT)."""
+        covariance can be computed for aligned_ago_s (a loop only partly damped has no settled
+        covariance for `aligned_since`'s stable form, and Van Loan's loses its precision)."""
         if self.model != 'schuler':
             return
         try:
@@ -120,7 +121,7 @@ class MasterConfig:
             return
         rates = -np.linalg.eigvals(f).real
         fastest, slowest = float(rates.max()), float(rates.min())
-        if fastest <= 0.0:
+        if fastest <= 0.0 or slowest > 0.0:          # free (nothing grows) or damped (the stable form)
             return
         limit = VAN_LOAN_MAX_EXPONENT / fastest
         require(self.aligned_ago_s <= limit,
@@ -163,15 +164,21 @@ def error_dynamics(lat: float, damping: str = 'velocity', zeta: float = 0.5,
     return f, b
 
 
-def discretise(f: np.ndarray, b: np.ndarray, qc: np.ndarray, dt: float
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Exact (Phi, Gamma, Qd) over dt: x+ = Phi x + Gamma u + w, w ~ N(0, Qd) (Van Loan)."""
+def transition(f: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact (Phi, Gamma) over dt: x+ = Phi x + Gamma u."""
     n, m = f.shape[0], b.shape[1]
     a = np.zeros((n + m, n + m))
     a[:n, :n] = f
     a[:n, n:] = b
     e = expm(a * dt)
-    phi, gam = e[:n, :n], e[:n, n:]
+    return e[:n, :n], e[:n, n:]
+
+
+def discretise(f: np.ndarray, b: np.ndarray, qc: np.ndarray, dt: float
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Exact (Phi, Gamma, Qd) over dt: x+ = Phi x + Gamma u + w, w ~ N(0, Qd) (Van Loan)."""
+    n = f.shape[0]
+    phi, gam = transition(f, b, dt)
     vl = np.zeros((2 * n, 2 * n))
     vl[:n, :n] = -f
     vl[:n, n:] = qc
@@ -179,6 +186,20 @@ def discretise(f: np.ndarray, b: np.ndarray, qc: np.ndarray, dt: float
     ev = expm(vl * dt)
     qd = phi @ ev[:n, n:]
     return phi, gam, 0.5 * (qd + qd.T)
+
+
+def aligned_since(f: np.ndarray, b: np.ndarray, qc: np.ndarray, t: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Phi, Gamma, P) t after a perfect alignment: discretise's, or for a damped loop past
+    VAN_LOAN_MAX_EXPONENT the same covariance as P_inf - Phi P_inf Phi^T (P_inf the settled one,
+    from the Lyapunov equation), where Phi has decayed and nothing cancels."""
+    rates = -np.linalg.eigvals(f).real
+    if not (rates.min() > 0.0 and rates.max() * t > VAN_LOAN_MAX_EXPONENT):
+        return discretise(f, b, qc, t)
+    phi, gam = transition(f, b, t)
+    p_inf = solve_continuous_lyapunov(f, -qc)
+    p = p_inf - phi @ p_inf @ phi.T
+    return phi, gam, 0.5 * (p + p.T)
 
 
 def _sqrt_psd(q: np.ndarray) -> np.ndarray:
@@ -205,7 +226,7 @@ class SchulerErrorModel:
             x = np.zeros(5)
             p = None
             if cfg.aligned_ago_s > 0.0:
-                phi, gam, p = discretise(self.f, self.b, self.qc, cfg.aligned_ago_s)
+                phi, gam, p = aligned_since(self.f, self.b, self.qc, cfg.aligned_ago_s)
                 x = gam @ self.u
         if self.noisy and p is not None:     # aligned at the run's start (aligned_ago_s 0): no error yet
             x = x + _sqrt_psd(0.5 * (p + p.T)) @ self.rng.standard_normal(5)
