@@ -118,3 +118,19 @@ def test_reading_the_process_in_pieces_gives_the_same_samples_as_at_once():
     parts = [pieces.at(np.arange(a, min(a + 37, 9000))) for a in range(0, 9000, 37)]
     for i in range(2):
         np.testing.assert_array_equal(np.concatenate([p[i] for p in parts]), whole[i])
+
+
+def test_the_compiled_recursion_is_the_numpy_loop_bit_for_bit():
+    """deck_flexure._propagate against the loop it replaced, x <- x @ phi_t + noise_j @ L^T in
+    numpy, step by step, for two processes: the same numbers to the last bit."""
+    from alignment_core.aircraft.deck_flexure import _propagate
+    rng = np.random.default_rng(4)
+    x0 = rng.standard_normal((2, 3, 2))
+    phi_t = np.stack([gm2_discrete(1.0, 5.0, 0.01)[0].T, gm2_discrete(2.0, 0.5, 0.01)[0].T])
+    l_t = rng.standard_normal((2, 2, 2)) * 1e-3
+    noise = rng.standard_normal((50, 2, 3, 2))
+    x, expected = x0.copy(), []
+    for j in range(50):
+        x = x @ phi_t + noise[j] @ l_t
+        expected.append(x)
+    np.testing.assert_array_equal(_propagate(x0, phi_t, noise @ l_t), np.array(expected))

@@ -37,14 +37,17 @@ def test_master_attitude_priors_unused_may_be_zero_but_not_negative():
         _filter(model='vm12', master_heading_sigma_arcmin=-1.0)
 
 
-@pytest.mark.parametrize('arm', [[1e4, 0.0, 0.0], [150.0, 150.0, 0.0], [0.0, 0.0, -60.0]])
-def test_the_filter_lever_arm_has_the_aircraft_lever_arms_bounds(arm):
-    with pytest.raises(ConfigError, match=r"^filter: lever_arm_m out of range \(\|horizontal\| <= 200 m, "
-                                          r"\|z\| <= 50 m\)"):
+@pytest.mark.parametrize('arm', [[1e4, 0.0, 0.0], [250.0, 250.0, 0.0], [0.0, 0.0, -160.0]])
+def test_the_filter_lever_arm_is_bounded_as_the_aircraft_lever_arm_plus_a_survey_error(arm):
+    """The aircraft's arm is bounded at 200 m horizontally and 50 m vertically; the filter is told
+    that arm plus a survey error (sigma up to 10 m), so its bound is 100 m wider: an arm near the
+    aircraft's bound loads whatever the seed, one far beyond it (1e4 m diverged) does not."""
+    with pytest.raises(ConfigError, match=r"^filter: lever_arm_m out of range \(\|horizontal\| <= 300 m, "
+                                          r"\|z\| <= 150 m\)"):
         scenario.load('catapult_paper', {'filter.lever_arm_m': arm})
     with pytest.raises(ConfigError, match=r"^aircraft: lever_arm_m out of range"):
         scenario.load('catapult_paper', {'aircraft.lever_arm_m': arm})
-    assert _filter(lever_arm_m=(199.0, 0.0, 50.0)).lever_arm_m == (199.0, 0.0, 50.0)
+    assert _filter(lever_arm_m=(230.0, 0.0, 90.0)).lever_arm_m == (230.0, 0.0, 90.0)
 
 
 @pytest.mark.parametrize('algorithm', ['stf', 'stf_multiple', 'fading_tested', 'combined'])

@@ -26,3 +26,16 @@ def test_a_stroke_of_constant_acceleration_is_integrated_across_ldv_dropouts(bli
         f._record_ldv(LdvSample(t_ns=k * 10_000_000, v_s=v, sigma=0.01, valid=k not in blind))
     t = 0.8
     assert f.deck_motion.displacement[0] == pytest.approx(v0 * t + 0.5 * a * t * t, rel=1e-12)
+
+
+def test_a_dropout_longer_than_the_bridge_is_not_bridged():
+    """A gap over LDV_BRIDGE_S (1 s) is not integrated across (a later re-acquisition, a taxi):
+    the displacement is the moving run's before the gap plus the one after it, by the same
+    closed form on each side."""
+    sc = scenario.load('deck_paper', {'duration_s': 2.0})
+    f = TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)
+    f._launch._moving = True
+    for k in range(141):                     # valid 0-0.1 s and 1.31-1.4 s at 2 m/s, blind between
+        valid = k <= 10 or k >= 131
+        f._record_ldv(LdvSample(t_ns=k * 10_000_000, v_s=np.array([2.0, 0.0, 0.0]), sigma=0.01, valid=valid))
+    assert f.deck_motion.displacement[0] == pytest.approx(2.0 * (0.1 + 0.09), rel=1e-12)

@@ -106,7 +106,8 @@ class Scenario:
         if given('ldv.mode', 'filter.ldv_mode'):
             require(f.ldv_mode == self.ldv.mode,
                     f"filter.ldv_mode = {f.ldv_mode} contradicts ldv.mode = {self.ldv.mode}: the filter would reject "
-                    f"every LDV sample as of the wrong kind (leave filter.ldv_mode out: it follows ldv.mode)")
+                    f"every LDV sample as of the wrong kind (leave filter.ldv_mode out: it follows ldv.mode; "
+                    f"for a beam LDV set ldv.mode: beam)")
         if f.relative_velocity == 'zero' and given('filter.relative_velocity', 'aircraft', 'duration_s'):
             moving = self.moves_on_deck()
             require(not moving, f"filter.relative_velocity zero takes the slave as rigidly tied to the master's "

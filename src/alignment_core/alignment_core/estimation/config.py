@@ -19,8 +19,10 @@ MASTER_ATTITUDE_MODELS = ('vm15', 'seed003_24')              # master attitude s
 # inflate the whole covariance by a fading factor: with a beam LDV's one row the unobserved
 # directions grow without bound (fading only when fading_factor > 1; docs/engine.md)
 FADING_ALGORITHMS = ('stf', 'stf_multiple', 'fading', 'fading_tested', 'combined')
-DECK_SPOT_HORIZONTAL_M = 200.0    # a lever arm's bounds, as aircraft.lever_arm_m's (aircraft_config.py)
-DECK_SPOT_VERTICAL_M = 50.0
+# the lever arm told to the filter: aircraft.lever_arm_m's bounds (200 m, 50 m; aircraft_config.py)
+# plus a survey error's 10 sigma of 10 m, so a surveyed arm near the aircraft's bound loads every seed
+DECK_SPOT_HORIZONTAL_M = 300.0
+DECK_SPOT_VERTICAL_M = 150.0
 OUTPUT_RATE_MAX_HZ = 1e9          # an output period of at least 1 ns (engine.py counts it in whole ns)
 
 

@@ -38,6 +38,7 @@ from alignment_core.samples import DopplerSample, ImuSample, LdvSample, MasterSa
 from alignment_core.units import DEG
 
 STREAMS = ('imu', 'ldv', 'master')
+LDV_BRIDGE_S = 1.0      # the longest LDV dropout bridged while moving (the deck run is one stroke's length)
 DOPPLER_STREAMS = ('imu', 'ldv', 'doppler', 'master')   # seed001_13: the Doppler radar too
 
 
@@ -103,6 +104,7 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._deck_disp = np.zeros(3)
         self._last_ldv: LdvSample | None = None
         self._last_valid_ldv: tuple[LdvSample, bool] | None = None    # (sample, recorded moving)
+        self._ldv_bridge_ns = int(LDV_BRIDGE_S * 1e9)
         self._matching = False
         self._health = status.Health()
         self._monitor = NisMonitor(cfg.consistency_window_updates, cfg.consistency_warn_p,
@@ -210,14 +212,15 @@ class TransferAlignment(ImuEvents, EngineViews):
         """Integrate the deck displacement (when moving) and keep the sample by validity time; a
         beam sample, once moving, as the run along the track it implies (models/beam.py). Invalid
         samples while moving (a dropout in the stroke) are bridged by the trapezoid between the
-        valid samples around them, exact for a constant acceleration: the run they hid still
-        moved the aircraft along the deck."""
+        valid samples around them, exact for a constant acceleration, over at most LDV_BRIDGE_S:
+        the run they hid still moved the aircraft along the deck."""
         t = s.t_ns
         moving = self._launch.moving
         if moving and s.valid and s.beam is not None:
             s = replace(s, v_s=track_velocity(s.v_s, s.beam, self._cfg.heading_on_deck_deg * DEG))
         last = self._last_valid_ldv
-        if moving and s.valid and last is not None and (last[1] or last[0] is self._last_ldv):
+        if moving and s.valid and last is not None and (
+                last[0] is self._last_ldv or (last[1] and t - last[0].t_ns <= self._ldv_bridge_ns)):
             prev = last[0]
             self._deck_disp = self._deck_disp + 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
         self._last_ldv = s

@@ -40,7 +40,7 @@ class LaunchThresholds:
 FELT_MARGIN_NS = 100_000_000          # the IMU's velocity change is summed from 0.1 s before the run
 FELT_BASE_NS = 1_000_000_000          # against the mean specific force over the second before that
 FELT_BLIND_NS = 10_000_000_000        # an LDV blind before a run: the run began at most this long before it
-FELT_SPAN_NS = FELT_BLIND_NS + FELT_MARGIN_NS + FELT_BASE_NS + 1_000_000_000   # IMU intervals kept for the check
+FELT_SPAN_NS = FELT_BLIND_NS + FELT_MARGIN_NS + FELT_BASE_NS + 3_000_000_000   # IMU kept (+ latency, confirmation)
 
 
 class LaunchDetector:
@@ -62,8 +62,8 @@ class LaunchDetector:
         self._recent_sum = np.zeros(3)         # running sum of _recent (a cheap trigger for the median)
         self._imu: deque[tuple[int, float, float]] = deque()   # (t_end, specific force along x, h)
         self.felt_margin_mps = np.inf          # the last check's velocity change minus what it needed
-        self._last_valid_v: int | None = None  # validity time of the last valid LDV sample (the first
-                                               # sample's, valid or not, until one is valid)
+        self._t_last_valid: int | None = None  # validity time of the last valid LDV sample (until one is
+                                               # valid: a second into the data, so the check has a baseline)
         self._blind = True                     # the last LDV sample was invalid (or none was valid yet)
         self._run_from = 0                     # the earliest validity time the run being checked began
 
@@ -91,8 +91,9 @@ class LaunchDetector:
     def _start_run(self, t_v: int, was_blind: bool, since: int) -> None:
         """A run of fast samples starts with the one valid at t_v. If the LDV saw nothing valid just
         before it (a dropout; out of range at the spot since its first sample), the motion may
-        have begun in the blind time: from `since`, at most FELT_BLIND_NS earlier."""
-        self._run_from = max(since, t_v - FELT_BLIND_NS) if was_blind else t_v
+        have begun in the blind time: from `since`, at most FELT_BLIND_NS earlier (an LDV never
+        valid yet: from a second into its data, the check's baseline the second before)."""
+        self._run_from = min(t_v, max(since, t_v - FELT_BLIND_NS)) if was_blind else t_v
 
     def _felt(self, t_v: int, speed: float) -> bool:
         """Did the accelerometers feel a run that started at validity time t_v and reached `speed`
@@ -128,12 +129,12 @@ class LaunchDetector:
         speed = math.sqrt(float(s.v_s @ s.v_s)) if s.valid else 0.0
         fast = speed > lim.launch_mps
         valid_at = s.t_ns - lim.ldv_latency_ns
-        if self._last_valid_v is None:
-            self._last_valid_v = valid_at
-        was_blind, since = self._blind, self._last_valid_v
+        if self._t_last_valid is None:
+            self._t_last_valid = valid_at + FELT_BASE_NS + FELT_MARGIN_NS
+        was_blind, since = self._blind, self._t_last_valid
         self._blind = not s.valid
         if s.valid:
-            self._last_valid_v = valid_at
+            self._t_last_valid = valid_at
             rl = self._recent
             if len(rl) == rl.maxlen:
                 self._recent_sum -= rl[0]
