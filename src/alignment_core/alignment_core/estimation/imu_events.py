@@ -116,6 +116,7 @@ class ImuEvents:
         step taken yet, so it is dropped and started again at the first master valid where the
         IMU's data begins (`_before_imu_data`); the sample waits in the buffer for it."""
         self._live = None
+        self._counters.skipped_before_init += 1        # the master sample that started it
         self._init_from = self._imu_start
         self._buffer_imu(t, s)
         self._match_pending()
