@@ -3,9 +3,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Literal, cast
-
-import numpy as np
+from typing import Literal
 
 from alignment_core.ship import sea_state, wave_spectrum
 from alignment_core.validation import require
@@ -40,17 +38,6 @@ def _paper_amplitudes() -> dict[int, tuple[float, float, float]]:
 
 
 PAPER_AMPLITUDE_DEG = _paper_amplitudes()
-
-
-class _Quantile:
-    """Stands in for sea_state.resolve's random stream: every draw at quantile `u` (0 and 1 give
-    the ends of the ranges a sea_draw draws from)."""
-
-    def __init__(self, u: float) -> None:
-        self.u = u
-
-    def uniform(self) -> float:
-        return self.u
 
 
 @dataclass(frozen=True)
@@ -170,12 +157,11 @@ class ShipConfig:
     def peak_periods(self) -> tuple[float, float]:
         """The shortest and longest peak period Tp (s) the sea can have: sea_state.resolve's, or
         the ends of its draw's range under sea_draw."""
-        if not self.sea_draw:
+        if not self.sea_draw or self.tp_s > 0.0:
             tp = sea_state.resolve(self.sea_state, self.hs_m, self.tp_s).tp_s
             return tp, tp
-        ends = [sea_state.resolve(self.sea_state, self.hs_m, self.tp_s, cast(np.random.Generator, _Quantile(u))).tp_s
-                for u in (0.0, 1.0)]
-        return min(ends), max(ends)
+        lo, _, hi = sea_state.tp_law(self.sea_state, self.hs_m)
+        return lo, hi
 
     def validate_band(self) -> None:
         """One of omega_min / omega_max given, the other automatic (wave_spectrum.default_band of

@@ -79,15 +79,23 @@ def resolve(code: int, hs_m: float = 0.0, tp_s: float = 0.0,
     else:
         lo, hi = WMO_HS_BIN_M[code]
         hs = lo + (hi - lo) * u_hs
-    tcode = wmo_code(hs) if hs_m > 0.0 else code
     if tp_s > 0.0:
         tp = float(tp_s)
-    elif tcode == 0:
-        tp = BALES[1][3]
     else:
-        _, t_lo, t_hi, t_mode = BALES[tcode]
-        tp = t_mode if u_tp is None else _triangular_ppf(u_tp, t_lo, t_mode, t_hi)
+        t_lo, t_mode, t_hi = tp_law(code, hs_m)
+        tp = t_mode if u_tp is None or t_lo == t_hi else _triangular_ppf(u_tp, t_lo, t_mode, t_hi)
     return SeaState(code=code if hs_m <= 0.0 else wmo_code(hs), hs_m=hs, tp_s=float(tp))
+
+
+def tp_law(code: int, hs_m: float = 0.0) -> tuple[float, float, float]:
+    """(lowest, most probable, highest) Tp of the sea state (of the code an Hs override falls in):
+    the Bales bin `resolve` draws Tp from (calm: code 1's most probable Tp, fixed)."""
+    tcode = wmo_code(hs_m) if hs_m > 0.0 else code
+    if tcode == 0:
+        t = BALES[1][3]
+        return t, t, t
+    _, t_lo, t_hi, t_mode = BALES[tcode]
+    return t_lo, t_mode, t_hi
 
 
 def _triangular_ppf(u: float, a: float, c: float, b: float) -> float:
