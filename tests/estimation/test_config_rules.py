@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from alignment_core.config import scenario
-from alignment_core.estimation.config import FADING_ALGORITHMS, FilterConfig
+from alignment_core.estimation.config import FilterConfig
 from alignment_core.validation import ConfigError, build
 
 
@@ -70,5 +70,4 @@ def test_a_fixed_fading_factor_above_one_with_a_beam_ldv_is_refused():
 
 @pytest.mark.parametrize('algorithm', ['kf', 'carlson', 'ud', 'ekf', 'ukf', 'ckf'])
 def test_the_other_algorithms_run_a_beam_ldv(algorithm):
-    assert algorithm not in FADING_ALGORITHMS
     assert scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.algorithm': algorithm}).filter.ldv_mode == 'beam'

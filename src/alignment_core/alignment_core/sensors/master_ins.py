@@ -107,29 +107,14 @@ class MasterConfig:
 
     def validate_at(self, lat_deg: float) -> None:
         """The 'schuler' model at the ship's latitude (the scenario's check, which knows it): the
-        error dynamics exist there (error_dynamics' own test), and an `initial: aligned` noise
-        covariance can be computed for aligned_ago_s (a loop only partly damped has no settled
-        covariance for `aligned_since`'s stable form, and Van Loan's loses its precision)."""
+        error dynamics exist there (error_dynamics' own test)."""
         if self.model != 'schuler':
             return
         try:
-            f, _ = error_dynamics(lat_deg * DEG, self.damping, self.damping_ratio, self.gyrocompass_tau_s)
+            error_dynamics(lat_deg * DEG, self.damping, self.damping_ratio, self.gyrocompass_tau_s)
         except ValueError as e:
             raise ConfigError(f"ship.lat_deg = {lat_deg} is out of range for master.model schuler with damping "
                               f"{self.damping}: {e}") from None
-        if self.initial != 'aligned' or not (self.arw_dpsh > 0.0 or self.vrw_ugpshz > 0.0):
-            return
-        rates = -np.linalg.eigvals(f).real
-        fastest, slowest = float(rates.max()), float(rates.min())
-        if fastest <= 0.0 or slowest > 0.0:          # free (nothing grows) or damped (the stable form)
-            return
-        limit = VAN_LOAN_MAX_EXPONENT / fastest
-        require(self.aligned_ago_s <= limit,
-                f"master.aligned_ago_s = {self.aligned_ago_s:g} s is beyond {limit:.0f} s, the largest age allowed "
-                f"with damping_ratio {self.damping_ratio:g} and gyrocompass_tau_s {self.gyrocompass_tau_s:g} s at "
-                f"{lat_deg:g} deg: the noise covariance's discretisation grows as exp(t / {1.0 / fastest:.0f} s) "
-                f"and loses its precision beyond exp({VAN_LOAN_MAX_EXPONENT:g}); by then the loop's slowest mode has "
-                f"decayed to {np.exp(-slowest * limit):.2g} of its start (initial: settled is the limit)")
 
 
 def error_dynamics(lat: float, damping: str = 'velocity', zeta: float = 0.5,
