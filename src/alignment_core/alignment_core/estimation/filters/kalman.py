@@ -38,21 +38,22 @@ class KalmanFilter(Counters):
 
     @property
     def x(self) -> np.ndarray:
+        """The state (n,). Assigned from outside (the engine's feedback) it is kept in the filter's
+        dtype: a float32 filter stays single precision (an array of its dtype is kept as it is)."""
         return self._x
 
     @x.setter
     def x(self, value: np.ndarray) -> None:
-        """x assigned from outside (the engine's feedback) is kept in the filter's dtype: a float32
-        filter stays single precision (an array already of its dtype is kept as it is)."""
         self._x = as_dtype(value, self.dtype)
 
     @property
     def P(self) -> np.ndarray:
+        """The covariance (n, n); assigned from outside (launch noise, a bridged gap, a velocity
+        reset) it is kept in the filter's dtype, as x."""
         return self._P
 
     @P.setter
     def P(self, value: np.ndarray) -> None:
-        """P assigned from outside (launch noise, a bridged gap, a velocity reset), in the filter's dtype."""
         self._P = as_dtype(value, self.dtype)
 
     def reset_state(self, x: np.ndarray | None = None) -> None:
