@@ -29,7 +29,8 @@ def test_a_stroke_of_constant_acceleration_is_integrated_across_ldv_dropouts(bli
 
 
 def test_a_dropout_longer_than_the_bridge_is_not_bridged():
-    """A gap over LDV_BRIDGE_S (1 s) is not integrated across (a later re-acquisition, a taxi):
+    """A gap in slow motion over TRAPEZOID_MAX_NS (1 s) is not integrated across (a taxi, whose
+    speed the IMU cannot follow):
     the displacement is the moving run's before the gap plus the one after it, by the same
     closed form on each side."""
     sc = scenario.load('deck_paper', {'duration_s': 2.0})

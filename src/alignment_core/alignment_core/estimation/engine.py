@@ -17,6 +17,7 @@ from alignment_core.estimation.anchoring import (
 )
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.consistency import NisMonitor
+from alignment_core.estimation.deck_run import DeckRun
 from alignment_core.estimation.engine_views import EngineViews
 from alignment_core.estimation.filter_factory import make_filter
 from alignment_core.estimation.health import BREAKDOWN_ERRORS
@@ -38,7 +39,6 @@ from alignment_core.samples import DopplerSample, ImuSample, LdvSample, MasterSa
 from alignment_core.units import DEG
 
 STREAMS = ('imu', 'ldv', 'master')
-LDV_BRIDGE_S = 1.0      # the longest LDV dropout bridged while moving (the deck run is one stroke's length)
 DOPPLER_STREAMS = ('imu', 'ldv', 'doppler', 'master')   # seed001_13: the Doppler radar too
 
 
@@ -101,10 +101,7 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._init_from: int | None = None        # a told latency reaching before it: initialise from here
         self._next_out: int | None = None         # the next output at or after this master stamp
         self._t_first_master: int | None = None   # the IMU cannot have been silent before it
-        self._deck_disp = np.zeros(3)
-        self._last_ldv: LdvSample | None = None
-        self._last_valid_ldv: tuple[LdvSample, bool] | None = None    # (sample, recorded moving)
-        self._ldv_bridge_ns = int(LDV_BRIDGE_S * 1e9)
+        self._deck = DeckRun(self._ldv_lat_ns)
         self._matching = False
         self._health = status.Health()
         self._monitor = NisMonitor(cfg.consistency_window_updates, cfg.consistency_warn_p,
@@ -209,25 +206,13 @@ class TransferAlignment(ImuEvents, EngineViews):
             live.kf.P = live.kf.P + self._q_launch * late
 
     def _record_ldv(self, s: LdvSample) -> None:
-        """Integrate the deck displacement (when moving) and keep the sample by validity time; a
-        beam sample, once moving, as the run along the track it implies (models/beam.py). Invalid
-        samples while moving (a dropout in the stroke) are bridged by the trapezoid between the
-        valid samples around them, exact for a constant acceleration, over at most LDV_BRIDGE_S:
-        the run they hid still moved the aircraft along the deck."""
-        t = s.t_ns
+        """Keep the sample by validity time with the deck displacement at it (deck_run.py); a beam
+        sample, once moving, as the run along the track it implies (models/beam.py)."""
         moving = self._launch.moving
         if moving and s.valid and s.beam is not None:
             s = replace(s, v_s=track_velocity(s.v_s, s.beam, self._cfg.heading_on_deck_deg * DEG))
-        last = self._last_valid_ldv
-        if moving and s.valid and last is not None and (
-                last[0] is self._last_ldv or (last[1] and t - last[0].t_ns <= self._ldv_bridge_ns)):
-            prev = last[0]
-            self._deck_disp = self._deck_disp + 0.5 * (prev.v_s + s.v_s) * (t - prev.t_ns) * 1e-9
-        self._last_ldv = s
-        if s.valid:
-            self._last_valid_ldv = (s, moving)
-        self._ldv_history.record(LdvRecord(t - self._ldv_lat_ns, s.v_s, s.valid, moving, self._deck_disp,
-                                           beam=s.beam))
+        disp = self._deck.record(s, moving)
+        self._ldv_history.record(LdvRecord(s.t_ns - self._ldv_lat_ns, s.v_s, s.valid, moving, disp, beam=s.beam))
 
     def _on_doppler(self, t: int, s: DopplerSample) -> None:
         """Match the radar at its validity time (it is ordered after the IMU sample at t)."""
@@ -300,10 +285,10 @@ class TransferAlignment(ImuEvents, EngineViews):
         first one initialises the slave, the first after a gap on the deck re-anchors it)."""
         ldv = self._ldv_history.at(t_v)
         if self._rel.mode != LDV and (ldv is None or self._rel.rigid):
-            ldv = self._rel.stand_in(t_v, self._ldv_history.latest_ns, self._launch.moving, self._deck_disp)
+            ldv = self._rel.stand_in(t_v, self._ldv_history.latest_ns, self._launch.moving, self._deck.displacement)
         live = self._live
         reanchor = live is not None and self._anchor_from is not None
-        ref = self._matcher.reference(m, ldv, self._deck_disp, surveyed=reanchor)
+        ref = self._matcher.reference(m, ldv, self._deck.displacement, surveyed=reanchor)
         if live is None or reanchor:
             self._anchor(t_v, m, ref)
             return

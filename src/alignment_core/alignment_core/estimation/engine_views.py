@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
-
 from alignment_core.estimation import status
 from alignment_core.estimation.consistency import NisMonitor
+from alignment_core.estimation.deck_run import DeckRun
 from alignment_core.estimation.health import ERROR
 from alignment_core.estimation.input_streams import InputStreams
 from alignment_core.estimation.launch_detection import LaunchDetector
@@ -34,7 +33,7 @@ class EngineViews:
     _matching: bool
     _results: MatchResults
     _launch: LaunchDetector
-    _deck_disp: np.ndarray
+    _deck: DeckRun
     _model: ErrorModel
     _rel: RelativeVelocity
     _whiteness: InnovationWhiteness
@@ -114,7 +113,7 @@ class EngineViews:
     @property
     def deck_motion(self) -> DeckMotion:
         d = self._launch
-        return DeckMotion(d.moving, d.t_moving_ns, d.t_launch_ns, self._deck_disp.copy())
+        return DeckMotion(d.moving, d.t_moving_ns, d.t_launch_ns, self._deck.displacement.copy())
 
     @property
     def labels(self) -> tuple[str, ...]:

@@ -13,6 +13,7 @@ from alignment_core.estimation import status
 from alignment_core.estimation.anchoring import bridge_covariance, dead_reckoned
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.consistency import NisMonitor
+from alignment_core.estimation.deck_run import DeckRun
 from alignment_core.estimation.filters.base import NonlinearFilter
 from alignment_core.estimation.health import BREAKDOWN_ERRORS, ERROR, WARN
 from alignment_core.estimation.launch_detection import LaunchDetector
@@ -36,6 +37,7 @@ class ImuEvents:
     _matcher: Matcher
     _results: MatchResults
     _launch: LaunchDetector
+    _deck: DeckRun
     _live: LiveSolution | None
     _matching: bool
     _anchor_from: int | None
@@ -71,9 +73,11 @@ class ImuEvents:
         first = self._t_imu is None
         if first:
             self._imu_start = t - self._imu_dt_ns      # the first sample covers (t - dt, t]
+        h = self._imu_dt_nominal if self._t_imu is None else (t - self._t_imu) * 1e-9
+        f_x = float(s.accel[0])
+        self._deck.observe_imu(t, f_x, h)               # the deck run bridges the LDV's gaps with it
         if self._launch.t_launch_ns is None:            # the launch detector feels the stroke
-            h = self._imu_dt_nominal if self._t_imu is None else (t - self._t_imu) * 1e-9
-            self._launch.observe_imu(t, float(s.accel[0]), h)
+            self._launch.observe_imu(t, f_x, h)
         self._t_imu = t
         live = self._live
         if live is None or self._anchor_from is not None:
