@@ -36,26 +36,29 @@ def closed_form_run(k0: int, k1: int) -> float:
 
 
 def run(blind: range, baseline: float, direction=(0.8, 0.6, 0.0), feed_imu: bool = True, moving_from: int = 101,
-        until: int = 320, latency_ns: int = 0) -> DeckRun:
+        until: int = 320, latency_ns: int = 0, start_ns: int | None = 100 * STEP_NS) -> DeckRun:
     """Feed a DeckRun the stroke (the IMU's specific force along x is the acceleration plus a constant
     `baseline`: gravity on a pitched airframe, a bias) and an LDV, blind at the samples in `blind`,
-    that reads the velocity along `direction` (ship axes)."""
+    that reads the velocity along `direction` (ship axes); `start_ns`: where the launch detector dated
+    the stroke's start (the last interval before the acceleration ends at sample 100)."""
     u = np.asarray(direction)
     d = DeckRun(latency_ns)
     for k in range(1, until + 1):
         if feed_imu:
             d.observe_imu(k * STEP_NS, acceleration(k) + baseline, H)
         d.record(LdvSample(t_ns=k * STEP_NS + latency_ns, v_s=speed(k) * u, sigma=0.01, valid=k not in blind),
-                 moving=k >= moving_from)
+                 moving=k >= moving_from, t_start_ns=start_ns if k >= moving_from else None)
     return d
 
 
+@pytest.mark.parametrize('start_ns', [100 * STEP_NS, None, 60 * STEP_NS])
 @pytest.mark.parametrize('baseline', [0.0, 0.7, -1.3])
-def test_a_stroke_first_seen_halfway_is_bridged_from_the_parked_sample(baseline):
-    """The LDV blind from sample 50 (parked) to 199 (the stroke at 22 m/s): the run from the last
-    parked sample is the closed form's, whatever the constant part of the specific force, and along
-    the LDV's direction; before, the distance run blind was lost (the displacement began at 199)."""
-    d = run(range(50, 200), baseline)
+def test_a_stroke_first_seen_halfway_is_bridged_from_the_parked_sample(baseline, start_ns):
+    """The LDV blind from sample 50 (parked) to 199 (the stroke at 22 m/s): the run is the closed
+    form's, whatever the constant part of the specific force, and along the LDV's direction, from
+    the stroke's start as dated, undated (from the last parked sample) or dated early (still
+    parked); before, the distance run blind was lost (the displacement began at 199)."""
+    d = run(range(50, 200), baseline, start_ns=start_ns)
     expected = closed_form_run(49, 320)
     assert np.linalg.norm(d.displacement) == pytest.approx(expected, rel=1e-9)
     np.testing.assert_allclose(d.displacement / np.linalg.norm(d.displacement), [0.8, 0.6, 0.0], atol=1e-12)
@@ -94,17 +97,34 @@ def test_a_run_first_seen_moving_started_parked_within_the_imus_reach(parked_unt
         d.observe_imu(k * STEP_NS, acceleration(j) + 0.7, H)
         valid = (parked_until is not None and k <= parked_until) or j >= 199
         d.record(LdvSample(t_ns=k * STEP_NS, v_s=np.array([speed(max(j, 0)), 0.0, 0.0]), sigma=0.01, valid=valid),
-                 moving=j >= 101)
+                 moving=j >= 101, t_start_ns=(shift + 100) * STEP_NS)
     assert (shift + 199) * STEP_NS - SHAPED_MAX_NS > 20 * STEP_NS
     assert d.displacement[0] == pytest.approx(closed_form_run(0, 320), rel=1e-9)
 
 
-def test_slow_motion_across_a_gap_keeps_the_trapezoid():
-    """Creep at 0.5 m/s across a 0.5 s gap (the speed changes by less than SHAPED_MIN_MPS): the
-    IMU's residuals would swamp a slow run, so the trapezoid bridges it."""
+def test_slow_motion_across_a_long_gap_is_not_bridged_by_the_imu():
+    """Creep at 0.5 m/s, blind for 2 s (over TRAPEZOID_MAX_NS, the speed unchanged): the IMU's
+    residuals (here a 0.3 m/s^2 offset, and the deck's motion in a run) would swamp a slow run over
+    that long, so it is not bridged; the runs the LDV saw on either side count."""
     d = DeckRun()
-    for k in range(0, 101):
-        d.observe_imu(k * STEP_NS, 0.3, H)            # a baseline the trapezoid ignores
-        d.record(LdvSample(t_ns=k * STEP_NS, v_s=np.array([0.5, 0.0, 0.0]), sigma=0.01, valid=not 20 <= k < 70),
-                 moving=True)
-    assert d.displacement[0] == pytest.approx(0.5 * 1.0, rel=1e-12)
+    for k in range(0, 301):
+        d.observe_imu(k * STEP_NS, 0.3, H)
+        d.record(LdvSample(t_ns=k * STEP_NS, v_s=np.array([0.5, 0.0, 0.0]), sigma=0.01, valid=not 50 <= k < 250),
+                 moving=k > 0)                 # the first sample parked: the run starts there
+    assert d.displacement[0] == pytest.approx(0.5 * (0.49 + 0.5), rel=1e-12)
+
+
+def test_a_short_gap_at_the_strokes_start_follows_the_imu():
+    """Creeping at 0.04 m/s, then the stroke (10 m/s^2 from sample 100), the LDV blind from 85 to
+    129 (3 m/s at its end: under SHAPED_MIN_MPS, a gap under TRAPEZOID_MAX_NS): the IMU's shape
+    gives the closed form; the trapezoid from 0.04 to 3 m/s across it overshoots by 0.2 m."""
+    d = DeckRun()
+    v = [0.04 + speed(k) for k in range(0, 200)]
+    for k in range(0, 200):
+        d.observe_imu(k * STEP_NS, acceleration(k) - 0.6, H)
+        d.record(LdvSample(t_ns=k * STEP_NS, v_s=np.array([v[k], 0.0, 0.0]), sigma=0.01, valid=not 85 <= k < 130),
+                 moving=k > 0)
+    exact = sum(0.5 * (v[k] + v[k + 1]) * H for k in range(199))
+    assert d.displacement[0] == pytest.approx(exact, rel=1e-9)
+    trapezoid = exact - sum(0.5 * (v[k] + v[k + 1]) * H for k in range(84, 130)) + 0.5 * (v[84] + v[130]) * 0.46
+    assert trapezoid - exact > 0.15

@@ -202,9 +202,11 @@ def test_a_stroke_the_ldv_first_sees_halfway_is_felt_from_where_it_went_blind(bl
     """2 g from 2.0 s, the LDV blind from 1.0 s (a dropout) or never valid (out of range at the
     spot) until 2.5 s, when the aircraft already does 9.8 m/s: the accelerometers felt the whole
     9.8 m/s since the LDV last saw it parked, not the 0.1 s before its first fast sample (that
-    check released the stroke as parked, and the matches took a 10 m/s innovation as the deck's)."""
+    check released the stroke as parked, and the matches took a 10 m/s innovation as the deck's).
+    The launch is dated where the IMU felt the stroke begin, 2.0 s, not at the first fast sample
+    (2.5 s: the launch noise started half a second late)."""
     d = _stroke_seen_late(blind_from_s, 19.6133)
-    assert d.moving and d.t_launch_ns == 2500 * 1_000_000
+    assert d.moving and d.t_launch_ns == 2000 * 1_000_000
     assert d.felt_margin_mps > 0.0
 
 
@@ -213,3 +215,24 @@ def test_after_a_blind_spell_an_ldv_reading_the_imu_did_not_feel_is_still_not_a_
     accelerometers felt nothing since the LDV last saw the aircraft parked, so no launch."""
     d = _stroke_seen_late(1.0, 0.0, ldv_accel=19.6133)
     assert not d.moving and d.t_launch_ns is None
+
+
+def test_a_blind_stroke_is_dated_where_the_imu_felt_it_begin_despite_the_decks_motion():
+    """Parked on a deck that surges (0.3 m/s^2 at 8 s along x, on a 0.5 m/s^2 offset), the LDV blind
+    from 1.0 s; a 2 g stroke from 5.0 s, first seen at 5.5 s. Followed back from where the felt speed
+    is a tenth of the stroke's, its lowest point within 0.5 s is the stroke's start: the deck's
+    residual motion (+-0.4 m/s since the blind spell began) does not move the date by more than an
+    IMU interval or two."""
+    d = LaunchDetector(LaunchThresholds(0.05, 3, 0.0, 25, 0, 0.5, 0.2))
+    ms = 1_000_000
+    for k in range(1, 601):
+        t = k * 10 * ms
+        surge = 0.3 * np.sin(2.0 * np.pi * t * 1e-9 / 8.0)
+        d.observe_imu(t, 0.5 + surge + (19.6133 if t > 5000 * ms else 0.0), 0.01)
+        if t >= 5500 * ms:
+            d.observe(LdvSample(t, np.array([19.6133 * (t - 5000 * ms) * 1e-9, 0.0, 0.0]), 0.01, True))
+        else:
+            seen = t < 1000 * ms
+            d.observe(LdvSample(t, np.zeros(3), 0.01 if seen else float('nan'), seen))
+    assert d.moving and d.t_launch_ns is not None
+    assert abs(d.t_launch_ns - 5000 * ms) <= 20 * ms

@@ -211,7 +211,7 @@ class TransferAlignment(ImuEvents, EngineViews):
         moving = self._launch.moving
         if moving and s.valid and s.beam is not None:
             s = replace(s, v_s=track_velocity(s.v_s, s.beam, self._cfg.heading_on_deck_deg * DEG))
-        disp = self._deck.record(s, moving)
+        disp = self._deck.record(s, moving, self._launch.t_moving_ns)
         self._ldv_history.record(LdvRecord(s.t_ns - self._ldv_lat_ns, s.v_s, s.valid, moving, disp, beam=s.beam))
 
     def _on_doppler(self, t: int, s: DopplerSample) -> None:

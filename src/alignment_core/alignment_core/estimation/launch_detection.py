@@ -40,12 +40,14 @@ class LaunchThresholds:
 FELT_MARGIN_NS = 100_000_000          # the IMU's velocity change is summed from 0.1 s before the run
 FELT_BASE_NS = 1_000_000_000          # against the mean specific force over the second before that
 FELT_BLIND_NS = 10_000_000_000        # an LDV blind before a run: the run began at most this long before it
+ONSET_WINDOW_NS = 500_000_000         # a blind run: the parked level is the felt speed's lowest over this
 FELT_SPAN_NS = FELT_BLIND_NS + FELT_MARGIN_NS + FELT_BASE_NS + 3_000_000_000   # IMU kept (+ latency, confirmation)
 
 
 class LaunchDetector:
     """Parked until the LDV shows a launch (`confirm_samples` valid samples in a row faster than
-    `launch_mps`, dated at the first of them) or creep (the per-axis median of the last
+    `launch_mps`, dated at the first of them, or where the IMU felt it begin when the LDV was
+    blind before it) or creep (the per-axis median of the last
     `creep_window` valid samples faster than `creep_mps`); after creep, a run of samples faster
     than the median by `launch_mps` is the launch. Samples above the launch threshold are held
     back until their run is confirmed or broken."""
@@ -66,6 +68,7 @@ class LaunchDetector:
                                                # valid: a second into the data, so the check has a baseline)
         self._blind = True                     # the last LDV sample was invalid (or none was valid yet)
         self._run_from = 0                     # the earliest validity time the run being checked began
+        self._run_speed = 0.0                  # the speed its first sample showed (relative to before)
 
     @property
     def moving(self) -> bool:
@@ -88,12 +91,13 @@ class LaunchDetector:
         while q[0][0] < t_ns - FELT_SPAN_NS:
             q.popleft()
 
-    def _start_run(self, t_v: int, was_blind: bool, since: int) -> None:
+    def _start_run(self, t_v: int, was_blind: bool, since: int, speed: float) -> None:
         """A run of fast samples starts with the one valid at t_v. If the LDV saw nothing valid just
         before it (a dropout; out of range at the spot since its first sample), the motion may
         have begun in the blind time: from `since`, at most FELT_BLIND_NS earlier (an LDV never
         valid yet: from a second into its data, the check's baseline the second before)."""
         self._run_from = min(t_v, max(since, t_v - FELT_BLIND_NS)) if was_blind else t_v
+        self._run_speed = speed
 
     def _felt(self, t_v: int, speed: float) -> bool:
         """Did the accelerometers feel a run that started at validity time t_v and reached `speed`
@@ -108,20 +112,69 @@ class LaunchDetector:
         if lim.felt_fraction <= 0.0 or need <= 0.0 or not self._imu:
             return True
         split = t_v - FELT_MARGIN_NS
-        base_f = base_h = dv = h_sum = 0.0
+        dv = h_sum = 0.0
         for t, f, h in self._imu:
-            if t <= split:
-                if t > split - FELT_BASE_NS:
-                    base_f += f * h
-                    base_h += h
-            else:
+            if t > split:
                 dv += f * h
                 h_sum += h
         if h_sum == 0.0:
             return True
-        base = base_f / base_h if base_h > 0.0 else 0.0
-        self.felt_margin_mps = dv - base * h_sum - need
+        self.felt_margin_mps = dv - self._baseline(split) * h_sum - need
         return self.felt_margin_mps >= 0.0
+
+    def _baseline(self, split: int) -> float:
+        """The mean specific force along x over the second before `split` (0 without intervals)."""
+        base_f = base_h = 0.0
+        for t, f, h in self._imu:
+            if split - FELT_BASE_NS < t <= split:
+                base_f += f * h
+                base_h += h
+        return base_f / base_h if base_h > 0.0 else 0.0
+
+    def _felt_speed(self, t_from: int) -> list[tuple[int, float]]:
+        """(t_end, velocity change along x since FELT_MARGIN before t_from, less the baseline) of
+        the IMU intervals after that."""
+        split = t_from - FELT_MARGIN_NS
+        base = self._baseline(split)
+        out = []
+        dv = 0.0
+        for t, f, h in self._imu:
+            if t > split:
+                dv += (f - base) * h
+                out.append((t, dv))
+        return out
+
+    def _onset(self, t_v: int) -> int:
+        """When a run the LDV first saw at t_v began, if the LDV was blind before it: back from t_v,
+        the IMU's felt speed falls by nine tenths of the speed the LDV saw at t_v; the run began
+        where it left the parked level: the last interval before that within the felt tolerance of
+        its lowest over the ONSET_WINDOW_NS before (parked, the felt speed is the deck's residual
+        motion about a level), or the one before it if the speed there is over half the next
+        interval's change; never before the LDV last saw it parked. t_v itself when the LDV saw
+        the run start, the IMU is not watched, or the fall is not in the IMU's record."""
+        if self._run_from >= t_v or self.limits.felt_fraction <= 0.0 or self._run_speed <= 0.0:
+            return t_v
+        felt = [(t, dv) for t, dv in self._felt_speed(self._run_from) if t <= t_v]
+        if not felt:
+            return t_v
+        top = felt[-1][1] - 0.9 * self._run_speed
+        k = len(felt) - 1
+        while k >= 0 and felt[k][1] > top:
+            k -= 1
+        if k < 0:
+            return t_v
+        low = felt[k][1]
+        j = k
+        while j >= 0 and felt[j][0] >= felt[k][0] - ONSET_WINDOW_NS:
+            low = min(low, felt[j][1])
+            j -= 1
+        j = k
+        while felt[j][1] > low + self.limits.felt_tolerance_mps:
+            j -= 1
+        step = felt[j + 1][1] - felt[j][1] if j + 1 < len(felt) else 0.0
+        if j > 0 and step > 0.0 and felt[j][1] - low > 0.5 * step:   # it left the level an interval before
+            j -= 1
+        return max(felt[j][0], self._run_from)
 
     def observe(self, s: LdvSample) -> LdvDecision:
         """The decision for the next LDV sample (stamp order)."""
@@ -145,14 +198,14 @@ class LaunchDetector:
             median = self._median_speed()
             if s.valid and speed > lim.launch_mps + median:
                 if not self._fast_run:
-                    self._start_run(valid_at, was_blind, since)
+                    self._start_run(valid_at, was_blind, since, speed - median)
                 self._fast_run.append(s.t_ns)
                 if len(self._fast_run) >= lim.confirm_samples:
                     t_v = self._fast_run[0] - lim.ldv_latency_ns
                     if not self._felt(self._run_from, speed - median):
                         self._fast_run.clear()
                         return LdvDecision((s,), None, False, True)
-                    launch = self._launch(t_v)
+                    launch = self._launch(self._onset(t_v))
             elif s.valid:
                 self._fast_run.clear()
         if self._moving:
@@ -160,7 +213,7 @@ class LaunchDetector:
         creep = False
         if fast or (self._held and not s.valid):
             if not self._held:
-                self._start_run(valid_at, was_blind, since)
+                self._start_run(valid_at, was_blind, since, speed)
             self._held.append(s)
             self._held_fast += fast
             if self._held_fast < lim.confirm_samples:
@@ -169,7 +222,7 @@ class LaunchDetector:
             top = max(float(np.sqrt(h.v_s @ h.v_s)) for h in self._held if h.valid)
             if not self._felt(self._run_from, top):
                 return LdvDecision(self.release(), None, False, True)   # recorded as parked
-            launch = self._launch(t_v)
+            launch = self._launch(self._onset(t_v))
         elif self._creeping():
             self._moving = True
             self._t_moving = s.t_ns - lim.ldv_latency_ns
