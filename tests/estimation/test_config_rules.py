@@ -3,8 +3,10 @@ period below 1 ns, a master attitude prior of zero, a lever arm off any ship, an
 filter with a beam LDV (docs/engine.md's matrix)."""
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
+from alignment_core import pipeline
 from alignment_core.config import scenario
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.validation import ConfigError, build
@@ -68,6 +70,33 @@ def test_a_fixed_fading_factor_above_one_with_a_beam_ldv_is_refused():
     assert scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.algorithm': 'fading'}).filter.fading_factor == 1.0
 
 
+@pytest.mark.parametrize('algorithm', ['stf', 'stf_multiple'])
+def test_a_strong_tracking_filter_that_never_fades_runs_a_beam_ldv(algorithm):
+    """stf_lambda_max 1 caps the fading factor at 1: the STF is then the Kalman filter (its factor is
+    what sets them apart), so a beam LDV is no reason to refuse it; 30 s of deck_paper on a beam give
+    the kf's estimate bit for bit. A cap above 1 is refused, naming the way out."""
+    with pytest.raises(ConfigError, match=rf"algorithm {algorithm} cannot run with ldv_mode beam.*"
+                                          r"\(or stf_lambda_max 1, got 1.2\)$"):
+        scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.algorithm': algorithm, 'filter.stf_lambda_max': 1.2})
+    base = {'ldv.mode': 'beam', 'duration_s': 30.0}
+    kf = scenario.load('deck_paper', {**base, 'filter.algorithm': 'kf'})
+    stf = scenario.load('deck_paper', {**base, 'filter.algorithm': algorithm, 'filter.stf_lambda_max': 1.0})
+    inp = pipeline.simulate(kf)
+    a, b = pipeline.align(kf, inp).outputs[-1], pipeline.align(stf, inp).outputs[-1]
+    np.testing.assert_array_equal(a.misalignment, b.misalignment)
+    np.testing.assert_array_equal(a.misalignment_sigma, b.misalignment_sigma)
+
+
 @pytest.mark.parametrize('algorithm', ['kf', 'carlson', 'ud', 'ekf', 'ukf', 'ckf'])
 def test_the_other_algorithms_run_a_beam_ldv(algorithm):
     assert scenario.load('deck_paper', {'ldv.mode': 'beam', 'filter.algorithm': algorithm}).filter.ldv_mode == 'beam'
+
+
+@pytest.mark.parametrize('key', ['init_attitude_sigma_deg', 'init_yaw_sigma_deg'])
+def test_a_prior_less_certain_than_the_absurd_bound_is_refused(key):
+    """The published view holds any estimate whose misalignment sigma exceeds misalignment_max_deg
+    (publication.py): a prior at or above it would hold every output from the start."""
+    with pytest.raises(ConfigError, match=r"^filter: init_attitude_sigma_deg / init_yaw_sigma_deg \(30.0\) must be "
+                                          r"below misalignment_max_deg \(30.0\)"):
+        _filter(**{key: 30.0})
+    assert _filter(**{key: 29.0}).misalignment_max_deg == 30.0

@@ -73,8 +73,8 @@ def test_a_model_without_vertical_velocity_reports_it_unknown_and_seed001_has_a_
     assert odo.pose_cov[2, 2] == -1.0
 
 
-def _estimate(level=OK, mu=(1e-3, 2e-3, 3e-3), t=1, flags=()) -> Estimate:
-    return Estimate(t_ns=t, misalignment=np.array(mu), misalignment_sigma=np.full(3, 1e-4),
+def _estimate(level=OK, mu=(1e-3, 2e-3, 3e-3), t=1, flags=(), sig=(1e-4, 1e-4, 1e-4)) -> Estimate:
+    return Estimate(t_ns=t, misalignment=np.array(mu), misalignment_sigma=np.array(sig),
                     q_nb=np.array([0.0, 0.0, 0.0, 1.0]), attitude_cov=np.eye(3) * 1e-8, x=np.zeros(15),
                     sigma=np.ones(15), bias_gyro=np.zeros(3), bias_accel=np.zeros(3), nis=1.0, updates=t,
                     matching=True, level=level, flags=flags, healthy=level < ERROR)
@@ -85,6 +85,7 @@ def _prior(e: Estimate) -> Estimate:
 
 
 @pytest.mark.parametrize('bad', [dict(mu=(math.nan, 0.0, 0.0)), dict(mu=(0.0, 0.0, 31.0 * DEG)),
+                                 dict(sig=(1e-4, 31.0 * DEG, 1e-4)), dict(sig=(1e-4, 1e-4, 1e14 / 60 * DEG)),
                                  dict(level=ERROR, flags=('inconsistent',))])
 def test_a_bad_estimate_is_never_published_the_last_good_one_is(bad):
     g = PublishGuard(30.0 * DEG)

@@ -17,7 +17,8 @@ RATE_MODELS = ('vm12', 'vm15', 'seed003_21', 'seed003_24')   # phi and eps state
 BEAM_MODELS = ('vm12', 'vm15', 'seed000_6', 'seed003_21', 'seed003_24')   # linear, three velocity rows first
 MASTER_ATTITUDE_MODELS = ('vm15', 'seed003_24')              # master attitude states phi_m
 # inflate the whole covariance by a fading factor: with a beam LDV's one row the unobserved
-# directions grow without bound (fading only when fading_factor > 1; docs/engine.md)
+# directions grow without bound (fading only when fading_factor > 1, an STF's only when
+# stf_lambda_max > 1; docs/engine.md)
 FADING_ALGORITHMS = ('stf', 'stf_multiple', 'fading', 'fading_tested', 'combined')
 # the lever arm told to the filter: aircraft.lever_arm_m's bounds (200 m, 50 m; aircraft_config.py)
 # plus a survey error's 10 sigma of 10 m, so a surveyed arm near the aircraft's bound loads every seed
@@ -96,7 +97,7 @@ class FilterConfig:
     consistency_window_updates: int = 100
     consistency_warn_p: float = 1e-4          # a window whose NIS sum exceeds chi2(dof) at 1 - p fails: WARN
     consistency_error_windows: int = 3        # ... this many failing windows in a row: ERROR (persisting)
-    misalignment_max_deg: float = 30.0        # a published misalignment beyond this is absurd (never published)
+    misalignment_max_deg: float = 30.0        # a misalignment or its sigma beyond this is absurd (never published)
     heading_on_deck_deg: float = 0.0          # nominal aircraft heading on deck (from the bow, clockwise)
     master_latency_s: float = 0.0             # known latency: /master/odom data are valid at stamp - latency
     ldv_latency_s: float = 0.0                # the same for /ldv/twist
@@ -212,12 +213,15 @@ class FilterConfig:
         require(self.ldv_mode == 'vector' or self.model in BEAM_MODELS,
                 f"ldv_mode beam projects the three velocity rows on the beam: it needs one of "
                 f"{', '.join(BEAM_MODELS)}, got {self.model}")
-        fades = self.algorithm in FADING_ALGORITHMS and (self.algorithm != 'fading' or self.fading_factor > 1.0)
+        a = self.algorithm
+        fades = a in FADING_ALGORITHMS and not (a == 'fading' and self.fading_factor == 1.0) \
+            and not (a in ('stf', 'stf_multiple') and self.stf_lambda_max == 1.0)
         require(self.ldv_mode == 'vector' or not fades,
                 f"algorithm {self.algorithm} cannot run with ldv_mode beam: its fading factor inflates the whole "
                 f"covariance while the beam's one row leaves directions unobserved, which then grow without bound "
                 f"(the estimate diverges while the level stays OK); use kf, carlson, ud, ekf, ukf or ckf"
-                + (f" (or fading_factor 1, got {self.fading_factor})" if self.algorithm == 'fading' else ''))
+                + (f" (or fading_factor 1, got {self.fading_factor})" if a == 'fading' else '')
+                + (f" (or stf_lambda_max 1, got {self.stf_lambda_max})" if a in ('stf', 'stf_multiple') else ''))
 
     def validate_monitoring(self) -> None:
         """Plausibility limits, gap handling, the gate and the consistency monitor."""
@@ -242,6 +246,10 @@ class FilterConfig:
                 f"consistency_error_windows must be >= 1, got {self.consistency_error_windows}")
         require(self.misalignment_max_deg <= 180.0,
                 f"misalignment_max_deg must be <= 180, got {self.misalignment_max_deg}")
+        prior = max(self.init_attitude_sigma_deg, self.init_yaw_sigma_deg)
+        require(prior < self.misalignment_max_deg,
+                f"init_attitude_sigma_deg / init_yaw_sigma_deg ({prior}) must be below misalignment_max_deg "
+                f"({self.misalignment_max_deg}): an estimate less certain than that is published as absurd")
 
     def validate_combination(self) -> None:
         """Model x algorithm x options (the matrix in docs/engine.md)."""

@@ -138,7 +138,8 @@ class EstimateMaker:
 
 class PublishGuard:
     """The published view: an estimate at level ERROR, or with a non-finite field, or a
-    misalignment beyond `max_misalignment` rad, is replaced by the last good one (the last at OK,
+    misalignment or a misalignment sigma beyond `max_misalignment` rad (a filter that claims to
+    know less than that knows nothing a small-angle model can use), is replaced by the last good one (the last at OK,
     since a WARN may already be the start of the trouble; stamped now, at ERROR, flagged 'held');
     before any good one, by the prior (zero misalignment, its sigma).
     After a numerical breakdown the engine holds its last good estimate itself (the outputs
@@ -158,7 +159,8 @@ class PublishGuard:
         q = e.q_nb
         if abs(float(q @ q) - 1.0) > 1e-6:
             return False
-        return bool(np.max(np.abs(e.misalignment)) <= self.max_misalignment)
+        bound = self.max_misalignment
+        return bool(np.max(np.abs(e.misalignment)) <= bound and np.max(e.misalignment_sigma) <= bound)
 
     def publish(self, e: Estimate, prior: Callable[[Estimate], Estimate]) -> Estimate:
         """What a node publishes for output e; prior(e) stands in before the first good one."""
