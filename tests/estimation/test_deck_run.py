@@ -42,7 +42,7 @@ def run(blind: range, baseline: float, direction=(0.8, 0.6, 0.0), feed_imu: bool
     that reads the velocity along `direction` (ship axes); `start_ns`: where the launch detector dated
     the stroke's start (the last interval before the acceleration ends at sample 100)."""
     u = np.asarray(direction)
-    d = DeckRun(latency_ns)
+    d = DeckRun(latency_ns, axis=u)                 # the airframe's x runs along the track
     for k in range(1, until + 1):
         if feed_imu:
             d.observe_imu(k * STEP_NS, acceleration(k) + baseline, H)
@@ -91,7 +91,7 @@ def test_a_run_first_seen_moving_started_parked_within_the_imus_reach(parked_unt
     more than SHAPED_MAX_NS before it: the run is taken from rest at most 10 s before, as far as
     the IMU reaches, and is the closed form's (the stroke starts at sample 100)."""
     shift = 1200                          # the stroke 12 s into the data: the IMU's reach is 10 s
-    d = DeckRun()
+    d = DeckRun()                                   # the airframe's x along the ship's x (the default)
     for k in range(1, shift + 320 + 1):
         j = k - shift
         d.observe_imu(k * STEP_NS, acceleration(j) + 0.7, H)
@@ -128,3 +128,95 @@ def test_a_short_gap_at_the_strokes_start_follows_the_imu():
     assert d.displacement[0] == pytest.approx(exact, rel=1e-9)
     trapezoid = exact - sum(0.5 * (v[k] + v[k + 1]) * H for k in range(84, 130)) + 0.5 * (v[84] + v[130]) * 0.46
     assert trapezoid - exact > 0.15
+
+
+def smooth_stroke(t: float, peak: float = 20.0, rise: float = 2.0) -> tuple[float, float, float]:
+    """(acceleration, speed, distance) at t s of a stroke whose acceleration grows as
+    peak sin^2(pi t / (2 rise)) from t = 0 (at rest before), closed forms."""
+    if t <= 0.0:
+        return 0.0, 0.0, 0.0
+    w = np.pi / rise
+    a = peak * np.sin(0.5 * w * t) ** 2
+    v = peak * (0.5 * t - np.sin(w * t) / (2.0 * w))
+    x = peak * (0.25 * t * t + (np.cos(w * t) - 1.0) / (2.0 * w * w))
+    return a, v, x
+
+
+def test_a_smooth_stroke_off_the_imus_grid_is_bridged_to_the_interpolation_error():
+    """A stroke whose acceleration grows smoothly (no interval of constant acceleration), the LDV's
+    validity times 4 ms off the IMU's grid, blind for 0.8 s from 0.5 s: the IMU gives the mean
+    acceleration of each interval (the closed form's velocity change over it), and the bridge meets
+    the closed-form distance to the error of interpolating within an interval (dv'' h^2 T / 12,
+    under 1e-4 m here); the trapezoid between the gap's ends is off by 0.1 m."""
+    d = DeckRun(axis=np.array([1.0, 0.0, 0.0]))
+    off = 4_000_000
+    h = 0.01
+    for k in range(-20, 150):
+        t_end = k * STEP_NS
+        d.observe_imu(t_end, (smooth_stroke(t_end * 1e-9)[1] - smooth_stroke(t_end * 1e-9 - h)[1]) / h + 0.4, h)
+        t_ldv = t_end - STEP_NS + off               # validity (and stamp: no latency) inside the interval
+        v = smooth_stroke(t_ldv * 1e-9)[1]
+        d.record(LdvSample(t_ns=t_ldv, v_s=np.array([v, 0.0, 0.0]), sigma=0.01, valid=not 50 <= k < 130),
+                 moving=t_ldv > 0)
+    t_a, t_b = 49 * STEP_NS - STEP_NS + off, 130 * STEP_NS - STEP_NS + off
+    gap = smooth_stroke(t_b * 1e-9)[2] - smooth_stroke(t_a * 1e-9)[2]
+    # the LDV's own trapezoid between consecutive valid samples on either side of the gap
+    t_ldv = [k * STEP_NS - STEP_NS + off for k in range(-20, 150)]
+    ldv_seen = sum(0.5 * (smooth_stroke(a * 1e-9)[1] + smooth_stroke(b * 1e-9)[1]) * h
+                   for a, b in zip(t_ldv[:-1], t_ldv[1:]) if b > 0 and not t_a < b <= t_b)
+    bridged = d.displacement[0] - ldv_seen
+    assert bridged == pytest.approx(gap, abs=1e-4)
+    va, vb = smooth_stroke(t_a * 1e-9)[1], smooth_stroke(t_b * 1e-9)[1]
+    assert abs(0.5 * (va + vb) * (t_b - t_a) * 1e-9 - gap) > 0.1
+
+
+@pytest.mark.parametrize('v0, accel', [(-3.0, -8.0), (6.0, -12.0)])
+def test_backward_and_reversing_runs_follow_the_imu_with_its_sign(v0, accel):
+    """Tail first and speeding up (-3 m/s, -8 m/s^2), or reversing inside the gap (6 m/s, -12 m/s^2:
+    at rest at 0.5 s, then backwards), with the acceleration switching to 4 times that half-way
+    through the 0.8 s gap: the speed along the airframe's x is signed, so the bridge is the exact
+    run (the trapezoid between the ends assumes one acceleration)."""
+    d = DeckRun()
+    acc = [accel if k < 60 else 4.0 * accel for k in range(120)]
+    v = [v0]
+    for k in range(1, 120):
+        v.append(v[-1] + acc[k] * H)
+    for k in range(120):
+        d.observe_imu(k * STEP_NS, acc[k] - 0.3, H)
+        d.record(LdvSample(t_ns=k * STEP_NS, v_s=np.array([v[k], 0.0, 0.0]), sigma=0.01, valid=not 20 <= k < 100),
+                 moving=k > 0)
+    exact = sum(0.5 * (v[k] + v[k + 1]) * H for k in range(119))
+    assert d.displacement[0] == pytest.approx(exact, rel=1e-9)
+    trapezoid = exact - sum(0.5 * (v[k] + v[k + 1]) * H for k in range(19, 100)) + 0.5 * (v[19] + v[100]) * 0.81
+    assert abs(trapezoid - exact) > 0.2
+
+
+def test_a_slow_ldv_that_sees_every_sample_keeps_the_trapezoid():
+    """An LDV at 0.5 Hz (samples 2 s apart, all valid) on a taxi at 2 m/s: the trapezoid between
+    consecutive samples, as before the IMU bridge (16 m over 8 s)."""
+    d = DeckRun()
+    for k in range(0, 801):
+        d.observe_imu(k * STEP_NS, 0.2, H)
+        if k % 200 == 0:
+            d.record(LdvSample(t_ns=k * STEP_NS, v_s=np.array([2.0, 0.0, 0.0]), sigma=0.01, valid=True),
+                     moving=k > 0)
+    assert d.displacement[0] == pytest.approx(16.0, rel=1e-12)
+
+
+@pytest.mark.parametrize('dated', [True, False])
+def test_a_stroke_first_seen_slow_long_after_the_last_parked_sample_is_bridged_from_its_dated_start(dated):
+    """Parked on a surging deck (0.3 m/s^2 at 2 s, felt by the IMU), the LDV blind from sample 1;
+    the stroke (10 m/s^2 from sample 100) first seen at sample 125, at 2.5 m/s, 1.24 s after the last
+    parked sample. Dated at its start, the bridge runs over the 0.25 s of the stroke and is exact
+    (the surge before it does not enter). Undated, the bridge would span 1.24 s for under
+    SHAPED_MIN_MPS of change, where the deck's motion felt would swamp it: nothing is bridged."""
+    d = DeckRun()
+    v = [0.0 if k <= 100 else (k - 100) * 10.0 * H for k in range(200)]
+    for k in range(200):
+        surge = 0.3 * np.sin(np.pi * k * H) if k <= 100 else 0.0
+        d.observe_imu(k * STEP_NS, (10.0 if k > 100 else 0.0) + 0.5 + surge, H)
+        d.record(LdvSample(t_ns=k * STEP_NS, v_s=np.array([v[k], 0.0, 0.0]), sigma=0.01, valid=not 1 <= k < 125),
+                 moving=k >= 125, t_start_ns=100 * STEP_NS if dated and k >= 125 else None)
+    seen = sum(0.5 * (v[k] + v[k + 1]) * H for k in range(125, 199))
+    exact = sum(0.5 * (v[k] + v[k + 1]) * H for k in range(100, 199))
+    assert d.displacement[0] == pytest.approx(exact if dated else seen, rel=1e-9)

@@ -101,7 +101,8 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._init_from: int | None = None        # a told latency reaching before it: initialise from here
         self._next_out: int | None = None         # the next output at or after this master stamp
         self._t_first_master: int | None = None   # the IMU cannot have been silent before it
-        self._deck = DeckRun(self._ldv_lat_ns)
+        psi = cfg.heading_on_deck_deg * DEG              # the airframe's x axis on deck, ship axes
+        self._deck = DeckRun(self._ldv_lat_ns, np.array([np.cos(psi), -np.sin(psi), 0.0]))
         self._matching = False
         self._health = status.Health()
         self._monitor = NisMonitor(cfg.consistency_window_updates, cfg.consistency_warn_p,

@@ -41,6 +41,8 @@ FELT_MARGIN_NS = 100_000_000          # the IMU's velocity change is summed from
 FELT_BASE_NS = 1_000_000_000          # against the mean specific force over the second before that
 FELT_BLIND_NS = 10_000_000_000        # an LDV blind before a run: the run began at most this long before it
 ONSET_WINDOW_NS = 500_000_000         # a blind run: the parked level is the felt speed's lowest over this
+ONSET_SLOPE_INTERVALS = 5             # ... and the felt speed's slope where it leaves the level, over these
+ONSET_SLOPE_MIN_MPS2 = 1.0            # ... a stroke's (a parked deck's residual motion is a few tenths)
 FELT_SPAN_NS = FELT_BLIND_NS + FELT_MARGIN_NS + FELT_BASE_NS + 3_000_000_000   # IMU kept (+ latency, confirmation)
 
 
@@ -146,12 +148,14 @@ class LaunchDetector:
 
     def _onset(self, t_v: int) -> int:
         """When a run the LDV first saw at t_v began, if the LDV was blind before it: back from t_v,
-        the IMU's felt speed falls by nine tenths of the speed the LDV saw at t_v; the run began
-        where it left the parked level: the last interval before that within the felt tolerance of
-        its lowest over the ONSET_WINDOW_NS before (parked, the felt speed is the deck's residual
-        motion about a level), or the one before it if the speed there is over half the next
-        interval's change; never before the LDV last saw it parked. t_v itself when the LDV saw
-        the run start, the IMU is not watched, or the fall is not in the IMU's record."""
+        the IMU's felt speed falls by nine tenths of the speed the LDV saw at t_v; back from there
+        to the last interval within the felt tolerance of the parked level (its lowest over the
+        ONSET_WINDOW_NS before, the window moved back while its lowest is at its start on a stroke's
+        slope: parked, the felt speed is the deck's residual motion about a level),
+        and from that interval back along the ramp to the level (2 rise / slope, if the slope is a
+        stroke's: an interval early for a step, tens of ms late for a linear ramp); never before the
+        LDV last saw it parked. t_v itself when the LDV saw the run start,
+        the IMU is not watched, or the fall is not in the IMU's record."""
         if self._run_from >= t_v or self.limits.felt_fraction <= 0.0 or self._run_speed <= 0.0:
             return t_v
         felt = [(t, dv) for t, dv in self._felt_speed(self._run_from) if t <= t_v]
@@ -163,18 +167,35 @@ class LaunchDetector:
             k -= 1
         if k < 0:
             return t_v
-        low = felt[k][1]
-        j = k
-        while j >= 0 and felt[j][0] >= felt[k][0] - ONSET_WINDOW_NS:
-            low = min(low, felt[j][1])
-            j -= 1
+        end = k
+        while True:                                # the level: a window's lowest, moved back while on the ramp
+            low_i = j = end
+            while j >= 0 and felt[j][0] >= felt[end][0] - ONSET_WINDOW_NS:
+                if felt[j][1] < felt[low_i][1]:
+                    low_i = j
+                j -= 1
+            if low_i == j + 1 > 0 and self._slope(felt, low_i) >= ONSET_SLOPE_MIN_MPS2:
+                end = low_i
+                continue
+            break
+        low = felt[low_i][1]
         j = k
         while felt[j][1] > low + self.limits.felt_tolerance_mps:
             j -= 1
-        step = felt[j + 1][1] - felt[j][1] if j + 1 < len(felt) else 0.0
-        if j > 0 and step > 0.0 and felt[j][1] - low > 0.5 * step:   # it left the level an interval before
-            j -= 1
+        rise, slope = felt[j][1] - low, self._slope(felt, j)
+        if rise > 0.0 and slope >= ONSET_SLOPE_MIN_MPS2:     # back along the ramp to the level: 2 rise / slope
+            t_on = felt[j][0] - min(2.0 * rise / slope * 1e9, ONSET_WINDOW_NS)
+            while j > 0 and felt[j][0] > t_on:
+                j -= 1
         return max(felt[j][0], self._run_from)
+
+    @staticmethod
+    def _slope(felt: list[tuple[int, float]], j: int) -> float:
+        """The felt speed's slope (m/s^2) over the ONSET_SLOPE_INTERVALS after index j (0 at the end)."""
+        m = min(ONSET_SLOPE_INTERVALS, len(felt) - 1 - j)
+        if m <= 0:
+            return 0.0
+        return (felt[j + m][1] - felt[j][1]) / ((felt[j + m][0] - felt[j][0]) * 1e-9)
 
     def observe(self, s: LdvSample) -> LdvDecision:
         """The decision for the next LDV sample (stamp order)."""
