@@ -33,11 +33,15 @@ class DeckRun:
     a gap of at most TRAPEZOID_MAX_NS from a moving sample is bridged by the trapezoid; nothing
     else is."""
 
-    def __init__(self, ldv_latency_ns: int = 0, axis: np.ndarray | None = None) -> None:
+    def __init__(self, ldv_latency_ns: int = 0, axis: np.ndarray | None = None,
+                 imu: deque[tuple[int, float, float]] | None = None, span_ns: int = SHAPED_MAX_NS) -> None:
+        """axis: the airframe's x axis on deck (3,), ship axes; imu: the record of the IMU's intervals
+        to keep (shared with the launch detector), `span_ns` long (at least SHAPED_MAX_NS)."""
         self.displacement = np.zeros(3)
         self._latency = ldv_latency_ns
         self._axis = np.array([1.0, 0.0, 0.0]) if axis is None else np.asarray(axis, dtype=float)
-        self._imu: deque[tuple[int, float, float]] = deque()   # (t_end, specific force along x, h)
+        self._imu = deque() if imu is None else imu   # (t_end, specific force along x, h)
+        self._span = max(span_ns, SHAPED_MAX_NS)
         self._last: LdvSample | None = None
         self._last_valid: tuple[LdvSample, bool] | None = None  # (sample, recorded moving)
 
@@ -45,7 +49,7 @@ class DeckRun:
         """One IMU interval ending at t_ns: mean specific force along the aircraft's x axis, length h s."""
         q = self._imu
         q.append((t_ns, f_x, h))
-        while q[0][0] < t_ns - SHAPED_MAX_NS:
+        while q[0][0] < t_ns - self._span:
             q.popleft()
 
     def record(self, s: LdvSample, moving: bool, t_start_ns: int | None = None) -> np.ndarray:

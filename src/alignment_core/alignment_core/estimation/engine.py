@@ -23,7 +23,7 @@ from alignment_core.estimation.filter_factory import make_filter
 from alignment_core.estimation.health import BREAKDOWN_ERRORS
 from alignment_core.estimation.imu_events import ImuEvents
 from alignment_core.estimation.input_streams import InputStreams
-from alignment_core.estimation.launch_detection import LaunchDetector, LaunchThresholds
+from alignment_core.estimation.launch_detection import FELT_SPAN_NS, LaunchDetector, LaunchThresholds
 from alignment_core.estimation.matching import LiveSolution, Matcher, Reference
 from alignment_core.estimation.models import make_model
 from alignment_core.estimation.models.base import DV
@@ -87,9 +87,10 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._pending: deque[tuple[int, MasterSample]] = deque()   # (validity time, sample)
         self._t_master: int | None = None          # last master stamp, and the spacing of the last two
         self._master_spacing_ns = 0
+        imu_record: deque[tuple[int, float, float]] = deque()     # the IMU along x: the deck run feeds it
         self._launch = LaunchDetector(LaunchThresholds(
             cfg.launch_detect_mps, cfg.launch_confirm_samples, cfg.creep_detect_mps, cfg.creep_window_samples,
-            self._ldv_lat_ns, cfg.launch_felt_fraction, cfg.launch_felt_tolerance_mps))
+            self._ldv_lat_ns, cfg.launch_felt_fraction, cfg.launch_felt_tolerance_mps), imu_record)
         self._t_imu: int | None = None             # the last IMU stamp (the launch detector's intervals)
         # known-event process noise after the launch (velocity states)
         self._launch_ns = int(round(cfg.launch_noise_s * 1e9))
@@ -102,7 +103,7 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._next_out: int | None = None         # the next output at or after this master stamp
         self._t_first_master: int | None = None   # the IMU cannot have been silent before it
         psi = cfg.heading_on_deck_deg * DEG              # the airframe's x axis on deck, ship axes
-        self._deck = DeckRun(self._ldv_lat_ns, np.array([np.cos(psi), -np.sin(psi), 0.0]))
+        self._deck = DeckRun(self._ldv_lat_ns, np.array([np.cos(psi), -np.sin(psi), 0.0]), imu_record, FELT_SPAN_NS)
         self._matching = False
         self._health = status.Health()
         self._monitor = NisMonitor(cfg.consistency_window_updates, cfg.consistency_warn_p,

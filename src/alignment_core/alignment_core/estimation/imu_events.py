@@ -75,9 +75,7 @@ class ImuEvents:
             self._imu_start = t - self._imu_dt_ns      # the first sample covers (t - dt, t]
         h = self._imu_dt_nominal if self._t_imu is None else (t - self._t_imu) * 1e-9
         f_x = float(s.accel[0])
-        self._deck.observe_imu(t, f_x, h)               # the deck run bridges the LDV's gaps with it
-        if self._launch.t_launch_ns is None:            # the launch detector feels the stroke
-            self._launch.observe_imu(t, f_x, h)
+        self._deck.observe_imu(t, f_x, h)               # the record the deck run and the launch detector read
         self._t_imu = t
         live = self._live
         if live is None or self._anchor_from is not None:

@@ -54,7 +54,9 @@ class LaunchDetector:
     than the median by `launch_mps` is the launch. Samples above the launch threshold are held
     back until their run is confirmed or broken."""
 
-    def __init__(self, limits: LaunchThresholds) -> None:
+    def __init__(self, limits: LaunchThresholds, imu: deque[tuple[int, float, float]] | None = None) -> None:
+        """imu: the record of the IMU's intervals to read (the engine's, shared with the deck run and
+        fed by it); by default its own, fed by `observe_imu`."""
         self.limits = limits
         self._moving = False
         self._t_moving: int | None = None      # validity time from which the aircraft moves on the deck
@@ -64,7 +66,7 @@ class LaunchDetector:
         self._fast_run: list[int] = []         # stamps of fast samples in a row while creeping
         self._recent: deque[np.ndarray] = deque(maxlen=max(limits.creep_window, 1))
         self._recent_sum = np.zeros(3)         # running sum of _recent (a cheap trigger for the median)
-        self._imu: deque[tuple[int, float, float]] = deque()   # (t_end, specific force along x, h)
+        self._imu = deque() if imu is None else imu   # (t_end, specific force along x, h)
         self.felt_margin_mps = np.inf          # the last check's velocity change minus what it needed
         self._t_last_valid: int | None = None  # validity time of the last valid LDV sample (until one is
                                                # valid: a second into the data, so the check has a baseline)
