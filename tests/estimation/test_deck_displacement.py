@@ -29,9 +29,9 @@ def test_a_stroke_of_constant_acceleration_is_integrated_across_ldv_dropouts(bli
 
 
 def test_a_dropout_longer_than_the_bridge_is_not_bridged():
-    """A gap in slow motion over TRAPEZOID_MAX_NS (1 s) is not integrated across (a taxi, whose
-    speed the IMU cannot follow):
-    the displacement is the moving run's before the gap plus the one after it, by the same
+    """A gap in slow motion over TRAPEZOID_MAX_NS (1 s) is not integrated across (a taxi: the IMU
+    would not bridge it either, the deck's motion felt over that long swamping a slow run): the
+    displacement is the moving run's before the gap plus the one after it, by the same
     closed form on each side."""
     sc = scenario.load('deck_paper', {'duration_s': 2.0})
     f = TransferAlignment(sc.filter, pipeline.plane_of(sc), sc.rate_hz)

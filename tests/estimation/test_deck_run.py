@@ -85,11 +85,13 @@ def test_without_the_imu_a_gap_from_a_parked_sample_is_not_bridged():
     assert d.displacement[0] == pytest.approx(closed_form_run(200, 320), rel=1e-12)
 
 
+@pytest.mark.parametrize('dated', [True, False])
 @pytest.mark.parametrize('parked_until', [None, 20])
-def test_a_run_first_seen_moving_started_parked_within_the_imus_reach(parked_until):
+def test_a_run_first_seen_moving_started_parked_within_the_imus_reach(parked_until, dated):
     """The LDV never valid before the stroke's sample 199 (None), or last valid parked at sample 20,
-    more than SHAPED_MAX_NS before it: the run is taken from rest at most 10 s before, as far as
-    the IMU reaches, and is the closed form's (the stroke starts at sample 100)."""
+    more than SHAPED_MAX_NS before it: the run is taken from rest, from its dated start or, undated,
+    from 10 s before (as far as the IMU reaches), and is the closed form's (the stroke starts at
+    sample 100)."""
     shift = 1200                          # the stroke 12 s into the data: the IMU's reach is 10 s
     d = DeckRun()                                   # the airframe's x along the ship's x (the default)
     for k in range(1, shift + 320 + 1):
@@ -97,7 +99,7 @@ def test_a_run_first_seen_moving_started_parked_within_the_imus_reach(parked_unt
         d.observe_imu(k * STEP_NS, acceleration(j) + 0.7, H)
         valid = (parked_until is not None and k <= parked_until) or j >= 199
         d.record(LdvSample(t_ns=k * STEP_NS, v_s=np.array([speed(max(j, 0)), 0.0, 0.0]), sigma=0.01, valid=valid),
-                 moving=j >= 101, t_start_ns=(shift + 100) * STEP_NS)
+                 moving=j >= 101, t_start_ns=(shift + 100) * STEP_NS if dated else None)
     assert (shift + 199) * STEP_NS - SHAPED_MAX_NS > 20 * STEP_NS
     assert d.displacement[0] == pytest.approx(closed_form_run(0, 320), rel=1e-9)
 

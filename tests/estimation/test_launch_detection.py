@@ -219,10 +219,10 @@ def test_after_a_blind_spell_an_ldv_reading_the_imu_did_not_feel_is_still_not_a_
 
 def test_a_blind_stroke_is_dated_where_the_imu_felt_it_begin_despite_the_decks_motion():
     """Parked on a deck that surges (0.3 m/s^2 at 8 s along x, on a 0.5 m/s^2 offset), the LDV blind
-    from 1.0 s; a 2 g stroke from 5.0 s, first seen at 5.5 s. Followed back from where the felt speed
-    is a tenth of the stroke's, its lowest point within 0.5 s is the stroke's start: the deck's
-    residual motion (+-0.4 m/s since the blind spell began) does not move the date by more than an
-    IMU interval or two."""
+    from 1.0 s; a 2 g stroke from 5.0 s, first seen at 5.5 s. The parked level is the felt speed's
+    lowest over the half second before it reaches a tenth of the stroke's: the deck's residual
+    motion (+-0.4 m/s since the blind spell began) does not move the date by more than an IMU
+    interval or two."""
     d = LaunchDetector(LaunchThresholds(0.05, 3, 0.0, 25, 0, 0.5, 0.2))
     ms = 1_000_000
     for k in range(1, 601):

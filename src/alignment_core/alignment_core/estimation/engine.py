@@ -91,7 +91,7 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._launch = LaunchDetector(LaunchThresholds(
             cfg.launch_detect_mps, cfg.launch_confirm_samples, cfg.creep_detect_mps, cfg.creep_window_samples,
             self._ldv_lat_ns, cfg.launch_felt_fraction, cfg.launch_felt_tolerance_mps), imu_record)
-        self._t_imu: int | None = None             # the last IMU stamp (the launch detector's intervals)
+        self._t_imu: int | None = None             # the last IMU stamp (the IMU record's intervals)
         # known-event process noise after the launch (velocity states)
         self._launch_ns = int(round(cfg.launch_noise_s * 1e9))
         dv = np.array([k == DV for k in self._model.kinds], dtype=float)

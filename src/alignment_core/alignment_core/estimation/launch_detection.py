@@ -49,9 +49,9 @@ FELT_SPAN_NS = FELT_BLIND_NS + FELT_MARGIN_NS + FELT_BASE_NS + 3_000_000_000   #
 class LaunchDetector:
     """Parked until the LDV shows a launch (`confirm_samples` valid samples in a row faster than
     `launch_mps`, dated at the first of them, or where the IMU felt it begin when the LDV was
-    blind before it) or creep (the per-axis median of the last
-    `creep_window` valid samples faster than `creep_mps`); after creep, a run of samples faster
-    than the median by `launch_mps` is the launch. Samples above the launch threshold are held
+    blind before it) or creep (the per-axis median of the last `creep_window` valid samples
+    faster than `creep_mps`); after creep, a run of samples faster than the median by
+    `launch_mps` is the launch. Samples above the launch threshold are held
     back until their run is confirmed or broken."""
 
     def __init__(self, limits: LaunchThresholds, imu: deque[tuple[int, float, float]] | None = None) -> None:
@@ -152,12 +152,12 @@ class LaunchDetector:
         """When a run the LDV first saw at t_v began, if the LDV was blind before it: back from t_v,
         the IMU's felt speed falls by nine tenths of the speed the LDV saw at t_v; back from there
         to the last interval within the felt tolerance of the parked level (its lowest over the
-        ONSET_WINDOW_NS before, the window moved back while its lowest is at its start on a stroke's
-        slope: parked, the felt speed is the deck's residual motion about a level),
-        and from that interval back along the ramp to the level (2 rise / slope, if the slope is a
-        stroke's: an interval early for a step, tens of ms late for a linear ramp); never before the
-        LDV last saw it parked. t_v itself when the LDV saw the run start,
-        the IMU is not watched, or the fall is not in the IMU's record."""
+        ONSET_WINDOW_NS before; the window moved back while its lowest sits at its start on a
+        stroke's slope: parked, the felt speed is the deck's residual motion about a level); and
+        from that interval back along the ramp to the level (2 rise / slope, if the slope is a
+        stroke's: an interval early for a step, tens of ms late for a linear ramp). Never before
+        the LDV last saw it parked; t_v itself when the LDV saw the run start, the IMU is not
+        watched, or the fall is not in the IMU's record."""
         if self._run_from >= t_v or self.limits.felt_fraction <= 0.0 or self._run_speed <= 0.0:
             return t_v
         felt = [(t, dv) for t, dv in self._felt_speed(self._run_from) if t <= t_v]

@@ -139,8 +139,9 @@ class EstimateMaker:
 class PublishGuard:
     """The published view: an estimate at level ERROR, or with a non-finite field, or a
     misalignment or a misalignment sigma beyond `max_misalignment` rad (a filter that claims to
-    know less than that knows nothing a small-angle model can use), is replaced by the last good one (the last at OK,
-    since a WARN may already be the start of the trouble; stamped now, at ERROR, flagged 'held');
+    know less than that knows nothing a small-angle model can use), is replaced by the last good
+    one (the last at OK, since a WARN may already be the start of the trouble; stamped now, at
+    ERROR, flagged 'held');
     before any good one, by the prior (zero misalignment, its sigma).
     After a numerical breakdown the engine holds its last good estimate itself (the outputs
     carry it, with the free-inertial attitude): those pass, flagged 'held', unless the view is
