@@ -10,6 +10,7 @@ import pytest
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
+from alignment_core.estimation import health
 from alignment_core.estimation.health import ERROR
 
 SHORT = {'duration_s': 6.0, 'aircraft.catapult.launch_time_s': 3.0}
@@ -89,3 +90,33 @@ def test_by_default_an_absurd_master_velocity_is_rejected_at_the_push():
     assert f.counters.rejected_range == 1 and f.counters.numerical_failures == 0 and f.healthy
     assert f.counters.updates == ref.counters.updates - 1
     assert all(e.level < ERROR for e in f.outputs)
+
+
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+def test_the_health_check_refuses_each_kind_of_breakdown_and_only_those(dtype):
+    """A non-finite state, a zero, negative or non-finite variance are a breakdown; off-diagonal
+    cells are not checked; values whose sum would overflow are each finite, so healthy (a sum
+    of the elements would have called them non-finite). Compiled and interpreted agree."""
+    big = np.finfo(dtype).max
+    x, p = np.zeros(4, dtype), np.eye(4, dtype=dtype)
+    cases = [((x, p), True)]
+    for bad in (np.nan, np.inf, -np.inf):
+        xb = x.copy()
+        xb[2] = bad
+        cases.append(((xb, p), False))
+    for bad in (0.0, -1e-30, np.nan, np.inf):
+        pb = p.copy()
+        pb[3, 3] = bad
+        cases.append(((x, pb), False))
+    po = p.copy()
+    po[0, 1] = np.nan                             # off the diagonal: not the check's concern
+    cases.append(((x, po), True))
+    cases.append(((np.full(4, big, dtype), np.eye(4, dtype=dtype) * big), True))
+    for (xi, pi), want in cases:
+        assert health.healthy(xi, pi) is want
+        assert health.healthy.py_func(xi, pi) is want
+        if want:
+            health.check_health(xi, pi)
+        else:
+            with pytest.raises(health.NumericalBreakdownError):
+                health.check_health(xi, pi)

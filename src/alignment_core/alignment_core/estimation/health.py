@@ -7,11 +7,12 @@ import math
 
 import numpy as np
 
+from alignment_core.compiled import kernel
+
 OK, WARN, ERROR = 0, 1, 2          # DiagnosticStatus.OK / WARN / ERROR
 LEVEL_NAMES = ('OK', 'WARN', 'ERROR')
 
 _reduce = np.add.reduce
-_min = np.minimum.reduce
 
 
 def finite(*arrays: np.ndarray) -> bool:
@@ -39,6 +40,19 @@ def check_health(x: np.ndarray, p: np.ndarray) -> None:
     """Raise NumericalBreakdownError unless x is finite and P has a finite, positive diagonal
     (a Cholesky of every P would cost more than the update; a negative or non-finite
     variance is how single-precision breakdowns show first)."""
-    d = p.diagonal()                # the method: np.diagonal's wrapper costs more than the check
-    if not (finite(x, d) and float(_min(d)) > 0.0):
+    if not healthy(x, p):
         raise NumericalBreakdownError('covariance not positive definite or not finite')
+
+
+@kernel
+def healthy(x, p):
+    """True if every element of x (n,) is finite and every diagonal element of p (n, n) finite
+    and positive (a NaN fails both comparisons); each element is tested alone, so no sum of
+    finite values can overflow into a false alarm."""
+    for v in x:
+        if not (-math.inf < v < math.inf):
+            return False
+    for i in range(p.shape[0]):
+        if not (0.0 < p[i, i] < math.inf):
+            return False
+    return True

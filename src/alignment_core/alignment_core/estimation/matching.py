@@ -11,6 +11,7 @@ from typing import NamedTuple, Protocol, cast
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from alignment_core.compiled import as_float64, kernel
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.filter_factory import EngineFilter
 from alignment_core.estimation.filters.base import NonlinearFilter, solve
@@ -22,6 +23,7 @@ from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.outputs import Counters
 from alignment_core.estimation.reference_force import SpotAcceleration
 from alignment_core.geometry.rotations import cross3, floats, quat_mul_f, quat_to_dcm
+from alignment_core.geometry.rotations_compiled import cross_k, quat_to_dcm_k
 from alignment_core.navigation.history import LdvRecord, SlaveHistory
 from alignment_core.navigation.strapdown import NavState, Strapdown
 from alignment_core.samples import DopplerSample, MasterSample
@@ -167,15 +169,15 @@ class Matcher:
         """The reference for the slave from master sample m and the LDV at its validity time;
         `surveyed`: with the surveyed lever arm whatever the treatment (where the slave is, to
         place it there after a gap), else the one the matches use."""
-        c_m = quat_to_dcm(m.q_nb)
         moving = ldv is not None and ldv.moving
         disp = ldv.disp if ldv is not None else deck_disp
         r = self._r0 + self.results.corr.dr + disp if surveyed else self._lever_arm(disp)
         beam = ldv.beam if ldv is not None and ldv.valid else None
         # a beam LDV is the measurement parked too (its one row); a vector one only once moving
         v_rel = ldv.v_s if (ldv is not None and ldv.valid and (moving or beam is not None)) else np.zeros(3)
-        u_n = c_m @ (cross3(m.w_b, r) + v_rel)
-        return Reference(c_m, r, v_rel, u_n, c_m @ m.v_b + u_n, moving, None if beam is None else c_m @ beam)
+        c_m, u_n, v_ref = reference_velocities(as_float64(m.q_nb), as_float64(m.w_b), as_float64(m.v_b),
+                                               as_float64(r), as_float64(v_rel))
+        return Reference(c_m, r, v_rel, u_n, v_ref, moving, None if beam is None else c_m @ beam)
 
     def _lever_arm(self, deck_disp: np.ndarray) -> np.ndarray:
         """The lever arm put into the reference (ship axes): the surveyed spot (plus the
@@ -332,3 +334,15 @@ class Matcher:
                 nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + dv, lat=nav.lat + dpos[0],
                                lon=nav.lon + dpos[1], h=nav.h + dpos[2])
         return x_new, nav
+
+
+@kernel
+def reference_velocities(q_nb, w_b, v_b, r, v_rel):
+    """(C_m (3, 3), u_n = C_m (w_b x r + v_rel), v_ref = C_m v_b + u_n) of a master sample's
+    quaternion q_nb (4,), body rate w_b and velocity v_b (3,), with the lever arm r and the LDV
+    velocity v_rel (3,, ship axes): the reference's attitude, the spot's velocity relative to the
+    master and the velocity the slave should have. One kernel for what were six numpy calls."""
+    c_m = np.array(quat_to_dcm_k((q_nb[0], q_nb[1], q_nb[2], q_nb[3]))).reshape(3, 3)
+    arm = np.array(cross_k((w_b[0], w_b[1], w_b[2]), (r[0], r[1], r[2]))) + v_rel
+    u_n = np.dot(c_m, arm)
+    return c_m, u_n, np.dot(c_m, v_b) + u_n

@@ -6,6 +6,7 @@ from alignment_core.compiled import kernel
 from alignment_core.geometry import rotations
 
 quat_to_dcm_k = kernel(rotations.quat_to_dcm_f)
+cross_k = kernel(rotations.cross_f)
 quat_mul_k = kernel(rotations.quat_mul_f)
 normalized_k = kernel(rotations.normalized_f)
 rotvec_to_quat_k = kernel(rotations.rotvec_to_quat_f)
