@@ -36,6 +36,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import platform
+import re
 import resource
 import shlex
 import subprocess
@@ -195,6 +197,20 @@ def run(part: str, a: argparse.Namespace, pythonpath: str | None, scenario: str 
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
+def cpu_model() -> str:
+    """The processor's model name and clock as the kernel reports them ('' if it does not): the
+    same code runs 30 % slower on one of this workplace's machines than on another, so a table's
+    stamp says which it was measured on."""
+    try:
+        info = Path('/proc/cpuinfo').read_text()
+    except OSError:
+        return platform.processor()
+    name = re.search(r'^model name\s*:\s*(.+)$', info, re.M)
+    mhz = re.search(r'^cpu MHz\s*:\s*([0-9.]+)$', info, re.M)
+    return ' '.join(filter(None, [name.group(1).strip() if name else '',
+                                  f'{float(mhz.group(1)) / 1000:.1f} GHz' if mhz else '']))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument('--runs', type=int, default=4, help='Monte Carlo runs per worker setting')
@@ -262,7 +278,8 @@ def main() -> None:
     if a.publish:
         args = shlex.join(sys.argv[1:])
         out = {'stamp': {'commit': version, 'date': time.strftime('%Y-%m-%d', time.gmtime()),
-                         'cpus': os.cpu_count(), 'load_start': load0, 'load_end': os.getloadavg()[0],
+                         'cpus': os.cpu_count(), 'cpu': cpu_model(), 'load_start': load0,
+                         'load_end': os.getloadavg()[0],
                          'command': f'scripts/bench.sh speed {args}',
                          'settings': {k: v for k, v in vars(a).items() if k in SETTINGS}},
                'engine': eng['today'], 'kf': kf, 'pyins': peer or None, 'graphs': graphs, 'memory': memory,

@@ -106,3 +106,13 @@ def test_a_target_without_its_block_writes_nothing(tmp_path):
     with pytest.raises(ValueError, match='without_end'):
         speed_table.publish(run(), (good, bad))
     assert good.read_text() == '<!-- results:speed -->\nold\n<!-- /results:speed -->\n'
+
+
+def test_the_stamp_names_the_processor_when_the_run_recorded_it(tmp_path):
+    """A run before the stamp had a 'cpu' field renders as before (the test above)."""
+    doc = tmp_path / 'page'
+    doc.write_text('<!-- results:speed -->\n<!-- /results:speed -->\n')
+    r = run()
+    r['stamp']['cpu'] = 'AMD EPYC 2.6 GHz'
+    speed_table.publish(r, (doc,))
+    assert '2026-12-03, 2 CPUs (AMD EPYC 2.6 GHz), load average 0.5 at the start' in doc.read_text()
