@@ -198,9 +198,9 @@ def run(part: str, a: argparse.Namespace, pythonpath: str | None, scenario: str 
 
 
 def cpu_model() -> str:
-    """The processor's model name and clock as the kernel reports them ('' if it does not): the
-    same code runs 30 % slower on one of this workplace's machines than on another, so a table's
-    stamp says which it was measured on."""
+    """The processor's model name and clock from /proc/cpuinfo (platform.processor() without it,
+    '' when neither says): machines of one kind differ in speed, so a table's stamp says which one
+    it was measured on."""
     try:
         info = Path('/proc/cpuinfo').read_text()
     except OSError:
