@@ -120,3 +120,28 @@ def test_the_health_check_refuses_each_kind_of_breakdown_and_only_those(dtype):
         else:
             with pytest.raises(health.NumericalBreakdownError):
                 health.check_health(xi, pi)
+
+
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+def test_finite_refuses_any_non_finite_element_of_any_array(dtype):
+    """A NaN or an inf in any element of any argument (vectors, matrices, non-contiguous views,
+    lists) is not finite; large finite matrices whose sum would overflow are. The compiled check
+    of one array agrees with its interpreted form and with numpy's isfinite."""
+    big = np.finfo(dtype).max
+    ok = (np.ones(3, dtype), np.ones((6, 6), dtype), np.ones(21, dtype), np.full((3, 3), big, dtype))
+    assert health.finite(*ok) and health.finite() and health.finite([1.0, 2.0])
+    for k in range(len(ok)):
+        for bad in (np.nan, np.inf, -np.inf):
+            arrays = [a.copy() for a in ok]
+            arrays[k].flat[-1] = bad
+            assert not health.finite(*arrays)
+            assert not health.all_finite(arrays[k]) and not health.all_finite.py_func(arrays[k])
+    m = np.ones((6, 6), dtype)
+    m[1, 1] = np.nan
+    assert not health.finite(np.diagonal(m)) and not health.finite(m[::2, ::2] + 0, m.T)
+    assert not health.finite([1.0, np.inf])
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        a = rng.standard_normal((4, 5)).astype(dtype)
+        a[rng.random((4, 5)) < 0.05] = rng.choice([np.nan, np.inf, -np.inf])
+        assert health.all_finite(a) == bool(np.all(np.isfinite(a))) == health.all_finite.py_func(a)

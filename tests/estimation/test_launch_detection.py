@@ -261,3 +261,26 @@ def test_a_blind_stroke_that_ramps_up_is_dated_at_the_start_of_its_ramp(ramp_s):
         d.observe(LdvSample(t, np.array([speed(t * 1e-9) if seen else 0.0, 0.0, 0.0]), 0.01, seen))
     assert d.moving and d.t_launch_ns is not None
     assert abs(d.t_launch_ns - 5000 * ms) <= 35 * ms
+
+
+def test_the_window_kernels_are_numpys_arithmetic():
+    """The speed, the window's running sum and its mean's speed: numpy's own operations (v @ v,
+    total -= old, total += new, total / count) bit for bit, compiled and interpreted."""
+    from alignment_core.estimation.launch_detection import mean_norm, norm3, slide
+    rng = np.random.default_rng(3)
+    total = np.zeros(3)
+    want = np.zeros(3)
+    window: list[np.ndarray] = []
+    for k in range(400):
+        v = rng.standard_normal(3) * 10.0 ** rng.uniform(-4, 1)
+        assert norm3(v) == norm3.py_func(v) == float(np.sqrt(v @ v))
+        full = len(window) == 25
+        old = window.pop(0) if full else v
+        if full:
+            want -= old
+        want += v
+        (slide if k % 2 else slide.py_func)(total, old, v, full)
+        window.append(v)
+        assert np.array_equal(total, want)
+        mean = want / 25
+        assert mean_norm(total, 25) == mean_norm.py_func(total, 25) == float(np.sqrt(mean @ mean))

@@ -93,3 +93,27 @@ def test_without_history_the_windows_are_counted_but_not_kept():
         bounded.add(n, np.eye(3))
     assert kept.completed == bounded.completed == 3 and len(kept.history) == 3
     assert bounded.history == [] and bounded.last == kept.last
+
+
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+def test_the_normalised_innovation_is_numpys_and_refuses_bad_rows(dtype):
+    """e = y / sqrt(diag S) bit for bit as numpy computes it (the root in S's precision), compiled
+    and interpreted; a non-finite innovation or a variance that is not positive is refused."""
+    from alignment_core.estimation.whiteness import normalised
+    rng = np.random.default_rng(2)
+    for _ in range(200):
+        y = rng.standard_normal(3) * 10.0 ** rng.uniform(-6, 3)
+        a = rng.standard_normal((3, 3))
+        s = (a @ a.T + np.eye(3) * 1e-3).astype(dtype)
+        want = y / np.sqrt(s.diagonal())
+        for fun in (normalised, normalised.py_func):
+            ok, e = fun(y, s)
+            assert ok and e.dtype == np.float64 and np.array_equal(e, want)
+    s = np.eye(3, dtype=dtype)
+    for bad_y in (np.nan, np.inf):
+        assert not normalised(np.array([0.0, bad_y, 1.0]), s)[0]
+    for bad_v in (0.0, -1.0, np.nan):
+        sb = s.copy()
+        sb[2, 2] = bad_v
+        assert not normalised(np.ones(3), sb)[0]
+        assert InnovationWhiteness(20, 3, 0.01).add(np.ones(3), sb) is None

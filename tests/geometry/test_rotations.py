@@ -259,15 +259,6 @@ def test_axis_quaternions_and_products_against_scipy():
                                atol=1e-15)
 
 
-def test_rotate_attitude_turns_the_nav_frame():
-    # exp([phi x]) C_b^n: the nav-frame rotation applied on the left
-    q = Rotation.from_euler('ZYX', [40.0, -3.0, 7.0], degrees=True)
-    phi = np.array([2e-3, -1e-3, 4e-2])
-    got = rotations.rotate_attitude(q.as_quat(), phi)
-    np.testing.assert_allclose(rotations.quat_to_dcm(got), (Rotation.from_rotvec(phi) * q).as_matrix(), atol=1e-15)
-    assert np.linalg.norm(got) == pytest.approx(1.0, abs=1e-15)
-
-
 @pytest.mark.parametrize('k', [1, 2, 3, 7, 25, 1001])
 def test_rows_matmul_equals_one_row_at_a_time(k):
     """A (K, 3) batch gives each row's one-row product bit for bit (a plain (K, 3) @ (3, 3) goes

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from alignment_core.geometry import earth, rotations
 from alignment_core.geometry import rotations_compiled as rc
@@ -63,3 +64,25 @@ def test_libm_functions_round_as_pythons():
 @pytest.mark.parametrize('fun', [rc.quat_mul_k, rc.quat_to_dcm_k])
 def test_the_interpreted_function_is_kept(fun):
     assert fun.py_func.__module__ == 'alignment_core.geometry.rotations'
+
+
+def test_rotate_attitude_turns_the_nav_frame():
+    # exp([phi x]) C_b^n: the nav-frame rotation applied on the left (scipy's composition)
+    q = Rotation.from_euler('ZYX', [40.0, -3.0, 7.0], degrees=True)
+    phi = np.array([2e-3, -1e-3, 4e-2])
+    got = rc.rotate_attitude(q.as_quat(), phi)
+    np.testing.assert_allclose(rotations.quat_to_dcm(got), (Rotation.from_rotvec(phi) * q).as_matrix(), atol=1e-15)
+    assert np.linalg.norm(got) == pytest.approx(1.0, abs=1e-15)
+
+
+def test_rotate_attitude_is_the_float_forms_composition():
+    """Bit for bit the interpreted float forms, for float32 operands too (taken exactly)."""
+    rng = np.random.default_rng(6)
+    for v in _vectors(rng):
+        q = rng.standard_normal(4)
+        q /= np.linalg.norm(q)
+        want = rotations.normalized_f(rotations.quat_mul_f(rotations.rotvec_to_quat_f(*v), tuple(q.tolist())))
+        assert tuple(rc.rotate_attitude(q, np.array(v)).tolist()) == want
+        assert tuple(rc.rotate_attitude_k.py_func(q, np.array(v)).tolist()) == want
+    q32, v32 = np.array([0.1, -0.2, 0.3, 0.9], np.float32), np.array([1e-3, 2e-3, -3e-3], np.float32)
+    assert np.array_equal(rc.rotate_attitude(q32, v32), rc.rotate_attitude(q32.astype(float), v32.astype(float)))

@@ -80,9 +80,14 @@ def cache_dir() -> Path:
     raise OSError('no writable directory for the compiled kernels: set NUMBA_CACHE_DIR')
 
 
+FLOAT64 = np.dtype(np.float64)
+"""numpy's one native float64 descriptor: an array's dtype `is` it (identity: a cheaper test than
+equality, which converts its operand; a byte-swapped float64 is not it and is converted)."""
+
+
 def as_float64(a: Any) -> np.ndarray:
     """a as a float64 numpy array for a kernel (no copy when it is one already)."""
-    return a if type(a) is np.ndarray and a.dtype == np.float64 else np.asarray(a, dtype=np.float64)
+    return a if type(a) is np.ndarray and a.dtype is FLOAT64 else np.asarray(a, dtype=np.float64)
 
 
 class Kernel:

@@ -12,20 +12,30 @@ from alignment_core.compiled import kernel
 OK, WARN, ERROR = 0, 1, 2          # DiagnosticStatus.OK / WARN / ERROR
 LEVEL_NAMES = ('OK', 'WARN', 'ERROR')
 
-_reduce = np.add.reduce
-
-
 def finite(*arrays: np.ndarray) -> bool:
-    """True if every element is finite (a NaN or inf anywhere makes the sum non-finite). Small
-    vectors (the samples' 3- and 4-vectors) are summed as Python floats (~0.3 us); larger arrays
-    by the ufunc's reduce directly (~1.5 us; np.sum's wrapper costs ~4 us a call)."""
+    """True if every element is finite. Small vectors (the samples' 3- and 4-vectors) are summed
+    as Python floats (~0.3 us; a NaN or inf makes the sum non-finite); other float arrays are
+    tested element by element by a compiled kernel (~0.3 us against ~1.5 us for numpy's reduce),
+    anything else by numpy."""
     t = 0.0
     for a in arrays:
-        if type(a) is np.ndarray and a.ndim == 1 and a.size <= 16:
-            t += sum(a.tolist())
-        else:
-            t += float(_reduce(a, axis=None))
+        if type(a) is np.ndarray and a.dtype.char in 'fd':
+            if a.ndim == 1 and a.size <= 16:
+                t += sum(a.tolist())
+            elif not all_finite(a):
+                return False
+        elif not np.all(np.isfinite(a)):
+            return False
     return math.isfinite(t)
+
+
+@kernel
+def all_finite(a):
+    """True if every element of a (any shape, float64 or float32) is finite."""
+    for v in a.flat:
+        if not (-math.inf < v < math.inf):
+            return False
+    return True
 
 
 class NumericalBreakdownError(Exception):

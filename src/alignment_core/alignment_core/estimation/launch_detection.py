@@ -11,6 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from alignment_core.compiled import as_float64, kernel
 from alignment_core.samples import LdvSample
 
 
@@ -202,7 +203,7 @@ class LaunchDetector:
     def observe(self, s: LdvSample) -> LdvDecision:
         """The decision for the next LDV sample (stamp order)."""
         lim = self.limits
-        speed = math.sqrt(float(s.v_s @ s.v_s)) if s.valid else 0.0
+        speed = norm3(as_float64(s.v_s)) if s.valid else 0.0
         fast = speed > lim.launch_mps
         valid_at = s.t_ns - lim.ldv_latency_ns
         if self._t_last_valid is None:
@@ -212,10 +213,10 @@ class LaunchDetector:
         if s.valid:
             self._t_last_valid = valid_at
             rl = self._recent
-            if len(rl) == rl.maxlen:
-                self._recent_sum -= rl[0]
-            rl.append(s.v_s)
-            self._recent_sum += s.v_s
+            full = len(rl) == rl.maxlen
+            v = as_float64(s.v_s)
+            slide(self._recent_sum, rl[0] if full else v, v, full)
+            rl.append(v)
         launch = None
         if self._moving and self._t_launch is None:     # creeping: watch for the stroke
             median = self._median_speed()
@@ -275,8 +276,7 @@ class LaunchDetector:
         w = lim.creep_window
         if lim.creep_mps <= 0.0 or len(self._recent) < w:
             return False
-        mean = self._recent_sum / w
-        if math.sqrt(float(mean @ mean)) <= 0.5 * lim.creep_mps:
+        if mean_norm(self._recent_sum, w) <= 0.5 * lim.creep_mps:
             return False
         return self._median_speed() > lim.creep_mps
 
@@ -286,3 +286,29 @@ class LaunchDetector:
             return 0.0
         med = np.median(np.asarray(self._recent), axis=0)
         return float(np.sqrt(med @ med))
+
+
+@kernel
+def norm3(v):
+    """|v| of a vector (3,): the square root of v . v, the dot product through BLAS as numpy's
+    v @ v (the same number)."""
+    return math.sqrt(np.dot(v, v))
+
+
+@kernel
+def slide(total, old, new, full):
+    """The running sum total (3,) of a window, in place: less the sample leaving it (old, if the
+    window is full), plus the one entering it (new); element by element, as total -= old then
+    total += new."""
+    for i in range(total.shape[0]):
+        if full:
+            total[i] -= old[i]
+        total[i] += new[i]
+
+
+@kernel
+def mean_norm(total, count):
+    """|total / count| of a window's sum (3,) over its count of samples (total / count, then its
+    norm as norm3)."""
+    mean = total / float(count)
+    return math.sqrt(np.dot(mean, mean))

@@ -23,6 +23,8 @@ import numpy as np
 # same numbers): importing scipy.stats costs a node ~1 s of start-up
 from scipy.special import chdtrc
 
+from alignment_core.compiled import as_float64, kernel
+
 
 @dataclass(frozen=True)
 class WhitenessResult:
@@ -66,11 +68,9 @@ class InnovationWhiteness:
     def add(self, innovation: np.ndarray, s: np.ndarray) -> WhitenessResult | None:
         """One accepted update's innovation (m,) and its covariance S (m, m); the window's result
         when it completes. A change of m (rows added or dropped) restarts the window."""
-        # the checks on Python floats (np.all and np.isfinite cost microseconds a call on 3-vectors)
-        y, d = np.asarray(innovation, dtype=float), np.asarray(s).diagonal()
-        if not (all(map(math.isfinite, y.tolist())) and all(v > 0.0 for v in d.tolist())):
+        ok, e = normalised(as_float64(innovation), _array(s))
+        if not ok:
             return None
-        e = y / np.sqrt(d)
         if self._rows and len(self._rows[0]) != len(e):
             self._rows = []
         self._rows.append(e)
@@ -103,3 +103,23 @@ class InnovationWhiteness:
         return {'whiteness': 'fail' if r.failed else 'pass', 'whiteness_q': r.q, 'whiteness_dof': r.dof,
                 'whiteness_p': r.p, 'whiteness_r1_max': r.r1_max, 'whiteness_band': r.band,
                 'whiteness_windows': self.completed, 'whiteness_windows_failed': self.failures}
+
+
+def _array(s) -> np.ndarray:
+    """s as an ndarray (float64 or float32 kept: its variances' square roots are taken in its own
+    precision, as numpy's would be)."""
+    return s if type(s) is np.ndarray and s.dtype.char in 'fd' else np.asarray(s, dtype=float)
+
+
+@kernel
+def normalised(y, s):
+    """(True, e) with e_i = y_i / sqrt(S_ii) of an innovation y (m,) and its covariance s (m, m),
+    the root in S's precision; (False, y) when an element of y is not finite or a variance is
+    not positive (NaN included)."""
+    e = np.empty_like(y)
+    for i in range(y.shape[0]):
+        v = s[i, i]
+        if not (-math.inf < y[i] < math.inf and v > 0.0):
+            return False, y
+        e[i] = y[i] / np.sqrt(v)
+    return True, e

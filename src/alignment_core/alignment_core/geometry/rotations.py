@@ -286,13 +286,6 @@ def quat_to_dcm(q: np.ndarray) -> np.ndarray:
     return np.array(quat_to_dcm_f(floats(q))).reshape(3, 3)
 
 
-def rotate_attitude(q_nb: np.ndarray, phi) -> np.ndarray:
-    """exp([phi x]) C_b^n as a unit quaternion (4,): the attitude q_nb turned by the nav-frame
-    rotation vector phi (3,) and renormalised (the error-state models' attitude feedback)."""
-    x, y, z = floats(phi)
-    return np.array(normalized_f(quat_mul_f(rotvec_to_quat_f(x, y, z), floats(q_nb))))
-
-
 def slerp(q0: np.ndarray, q1: np.ndarray, f: float) -> np.ndarray:
     """Attitude a fraction f of the way from q0 to q1 (rotation about a fixed body axis)."""
     a = floats(q0)

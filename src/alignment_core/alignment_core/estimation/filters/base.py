@@ -109,9 +109,10 @@ class Counters:
                 'gated': self.n_gated, 'predicts': self.n_predicts}
 
 
-def as_dtype(a, dtype) -> np.ndarray:
-    """a as an ndarray of dtype, without a copy when it already is one."""
-    if type(a) is np.ndarray and a.dtype == dtype:
+def as_dtype(a, dtype: np.dtype) -> np.ndarray:
+    """a as an ndarray of dtype (a native float64 or float32 descriptor, np.dtype(...)), without a
+    copy when it already is one (identity of the descriptors: numpy has one of each native type)."""
+    if type(a) is np.ndarray and a.dtype is dtype:
         return a
     return np.asarray(a, dtype=dtype)
 

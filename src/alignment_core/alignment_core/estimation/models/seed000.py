@@ -42,11 +42,11 @@ from alignment_core.estimation.models.velocity_matching import attitude_variance
 from alignment_core.geometry.rotations import (
     quat_to_dcm,
     right_jacobian,
-    rotate_attitude,
     rotvec_to_dcm,
     skew,
     skew_into,
 )
+from alignment_core.geometry.rotations_compiled import rotate_attitude
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import DEG
 

@@ -61,7 +61,8 @@ from alignment_core.estimation.models.base import (
     relative_misalignment,
 )
 from alignment_core.geometry import earth
-from alignment_core.geometry.rotations import quat_to_dcm, rotate_attitude, skew_into
+from alignment_core.geometry.rotations import quat_to_dcm, skew_into
+from alignment_core.geometry.rotations_compiled import rotate_attitude
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import ARCMIN, DEG, DPH, UG
 

@@ -35,7 +35,8 @@ from alignment_core.estimation.models.base import (
     relative_misalignment,
 )
 from alignment_core.estimation.models.velocity_matching import attitude_variances, continuous, noise_densities
-from alignment_core.geometry.rotations import quat_to_dcm, rotate_attitude
+from alignment_core.geometry.rotations import quat_to_dcm
+from alignment_core.geometry.rotations_compiled import rotate_attitude
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import DPH, UG
 

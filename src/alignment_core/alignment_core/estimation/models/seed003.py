@@ -69,11 +69,11 @@ from alignment_core.geometry.rotations import (
     dcm_to_rotvec,
     floats,
     quat_to_dcm,
-    rotate_attitude,
     rotvec_to_dcm,
     skew_cells,
     skew_values,
 )
+from alignment_core.geometry.rotations_compiled import rotate_attitude
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import ARCMIN, DEG, DPH, UG
 

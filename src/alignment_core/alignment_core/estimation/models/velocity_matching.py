@@ -44,12 +44,11 @@ from alignment_core.estimation.models.base import (
 )
 from alignment_core.geometry.rotations import (
     floats,
-    rotate_attitude,
     skew_cells,
     skew_into,
     skew_values,
 )
-from alignment_core.geometry.rotations_compiled import quat_to_dcm_k, rotvec_to_dcm_k
+from alignment_core.geometry.rotations_compiled import quat_to_dcm_k, rotate_attitude, rotvec_to_dcm_k
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import ARCMIN, DEG, DPH, UG
 
