@@ -13,9 +13,10 @@ from scipy.spatial.transform import Rotation
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.health import ERROR, OK, WARN
 from alignment_core.estimation.models import make_model
+from alignment_core.estimation.models.base import DV, EPS
 from alignment_core.estimation.outputs import Estimate
 from alignment_core.estimation.publication import OdometryMaker, PublishGuard, prior_estimate
-from alignment_core.geometry import earth
+from alignment_core.geometry import earth, rotations
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import DEG
 
@@ -73,6 +74,50 @@ def test_a_model_without_vertical_velocity_reports_it_unknown_and_seed001_has_a_
     assert odo.pose_cov[2, 2] == -1.0
 
 
+def _numpy_odometry_parts(model, maker: OdometryMaker, st: NavState, p, gyro, bg):
+    """The odometry's velocity, rate and covariances as numpy computes them (the formulas of
+    OdometryMaker's docstring, as the engine computed them before its kernel)."""
+    c = np.array(rotations.quat_to_dcm_f(tuple(st.q_nb.tolist()))).reshape(3, 3)
+    w_in = earth.omega_ie_n(st.lat) + earth.omega_en_n(st.lat, st.h, st.v_n)
+    v_b = c.T @ st.v_n
+    w_b = np.zeros(3) if gyro is None else (gyro - bg) - c.T @ w_in
+    pose = np.zeros((6, 6))
+    pose[0, 0] = pose[1, 1] = pose[2, 2] = -1.0
+    pose[3:, 3:] = p[model.attitude, model.attitude]
+    dv = [i for i, k in enumerate(model.kinds) if k == DV]
+    twist = np.zeros((6, 6))
+    if len(dv) == 3:
+        twist[:3, :3] = c.T @ p[np.ix_(dv, dv)] @ c
+    else:
+        twist[0, 0] = twist[1, 1] = twist[2, 2] = -1.0
+    eps = [i for i, k in enumerate(model.kinds) if k == EPS]
+    bias = np.diagonal(p)[eps] if len(eps) == 3 else np.full(3, maker._bias_var)
+    twist[3:, 3:] = np.diag(maker._rate_var + bias)
+    return v_b, w_b, pose, twist
+
+
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+@pytest.mark.parametrize('model', ['vm15', 'vm12', 'seed002_10', 'seed003_21'])
+def test_the_odometry_is_numpys_bit_for_bit(model, dtype):
+    """The compiled odometry gives numpy's numbers exactly: the products through the same BLAS
+    calls, the gyro noise added to a single-precision bias variance in single precision (as numpy
+    adds a float to a float32 array); with and without a gyro sample."""
+    maker, n = _maker(model)
+    m = make_model(dataclasses.replace(FilterConfig(), model=model))
+    rng = np.random.default_rng(7)
+    for k in range(40):
+        q = Rotation.random(random_state=k).as_quat()
+        st = NavState(q_nb=q, v_n=rng.standard_normal(3) * 30.0, lat=float(rng.uniform(-1.4, 1.4)),
+                      lon=float(rng.uniform(-3, 3)), h=float(rng.uniform(0, 50)))
+        a = rng.standard_normal((n, n)) * 10.0 ** rng.uniform(-6, 0)
+        p = (a @ a.T).astype(dtype)
+        gyro = None if k % 4 == 0 else rng.standard_normal(3) * 0.1
+        bg = rng.standard_normal(3) * 1e-5
+        odo = maker.make(st, p, gyro, bg)
+        for got, want in zip(odo[1:], _numpy_odometry_parts(m, maker, st, p, gyro, bg)):
+            assert np.array_equal(got, want)
+
+
 def _estimate(level=OK, mu=(1e-3, 2e-3, 3e-3), t=1, flags=(), sig=(1e-4, 1e-4, 1e-4)) -> Estimate:
     return Estimate(t_ns=t, misalignment=np.array(mu), misalignment_sigma=np.array(sig),
                     q_nb=np.array([0.0, 0.0, 0.0, 1.0]), attitude_cov=np.eye(3) * 1e-8, x=np.zeros(15),
@@ -114,3 +159,13 @@ def test_after_a_breakdown_the_engines_own_hold_passes_unless_already_holding():
     g.publish(_estimate(level=ERROR, flags=('inconsistent',), t=3), _prior)
     out = g.publish(_estimate(level=ERROR, flags=('breakdown',), mu=(9e-3, 0, 0), t=4), _prior)
     np.testing.assert_array_equal(out.misalignment, [1e-3, 2e-3, 3e-3])   # the view's own hold stays
+
+
+def test_without_bias_states_the_rate_variance_takes_the_given_bias_variance():
+    from alignment_core.estimation.publication import odometry_parts
+    none = np.array([], dtype=np.int64)
+    q, z = np.array([0.0, 0.0, 0.0, 1.0]), np.zeros(3)
+    for fun in (odometry_parts, odometry_parts.py_func):
+        _, _, pose, twist = fun(q, z, z, z, False, np.eye(6), np.arange(3), none, none, 2.0, 2.5)
+        np.testing.assert_array_equal(np.diag(twist), [-1.0, -1.0, -1.0, 2.5, 2.5, 2.5])
+        np.testing.assert_array_equal(np.diag(pose), [-1.0, -1.0, -1.0, 1.0, 1.0, 1.0])

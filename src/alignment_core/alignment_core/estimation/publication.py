@@ -11,6 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from alignment_core.compiled import as_float64, kernel
 from alignment_core.estimation.health import ERROR, OK, finite
 from alignment_core.estimation.matching import LiveSolution, MatchResults
 from alignment_core.estimation.models import ErrorModel
@@ -18,7 +19,7 @@ from alignment_core.estimation.models.base import DV, EPS
 from alignment_core.estimation.outputs import Estimate
 from alignment_core.estimation.state_estimate import StateEstimate
 from alignment_core.geometry import earth
-from alignment_core.geometry.rotations import quat_to_dcm
+from alignment_core.geometry.rotations_compiled import quat_to_dcm_k
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import DEG, DPH
 
@@ -43,11 +44,14 @@ class OdometryMaker:
     def __init__(self, model: ErrorModel, plane: earth.TangentPlane, imu_dt: float, arw_dpsh: float,
                  gyro_bias_sigma_dph: float) -> None:
         self._plane = plane
-        self._att = model.attitude
+        n = len(model.kinds)
+        self._att = np.arange(n)[model.attitude]
+        if len(self._att) != 3:
+            raise ValueError(f'the attitude states {model.attitude} of the model are not three')
         dv = [i for i, k in enumerate(model.kinds) if k == DV]
-        self._dv = np.ix_(dv, dv) if len(dv) == 3 else None      # np.ix_ costs ~8 us a call: once here
+        self._dv = np.array(dv if len(dv) == 3 else [], dtype=np.int64)
         eps = [i for i, k in enumerate(model.kinds) if k == EPS]
-        self._eps = eps if len(eps) == 3 else None
+        self._eps = np.array(eps if len(eps) == 3 else [], dtype=np.int64)
         labels = model.labels
         self._pos = (labels.index('dlon'), labels.index('dlat')) if 'dlat' in labels and 'dlon' in labels else None
         self._rate_var = (arw_dpsh * DEG / 60.0) ** 2 / imu_dt
@@ -57,27 +61,18 @@ class OdometryMaker:
         """p: the filter's covariance; gyro: the last raw gyro rate (None before the first IMU
         step), bg its bias estimate. The body rate w.r.t. the nav frame is the gyro's less the nav
         frame's own rate w.r.t. inertial space (Earth rate and transport rate at the solution)."""
-        c = quat_to_dcm(st.q_nb)
         w_in = earth.omega_ie_n(st.lat) + earth.omega_en_n(st.lat, st.h, st.v_n)
         p_w = np.asarray(self._plane.from_geodetic(st.lat, st.lon, st.h), dtype=float).reshape(3)
-        v_b = c.T @ st.v_n
-        w_b = np.zeros(3) if gyro is None else (gyro - bg) - c.T @ w_in
-        pose = np.zeros((6, 6))
-        pose[0, 0] = pose[1, 1] = pose[2, 2] = UNKNOWN
+        w_m = w_in if gyro is None else gyro - bg
+        p = p if type(p) is np.ndarray and p.dtype.char in 'fd' else np.asarray(p, dtype=float)
+        v_b, w_b, pose, twist = odometry_parts(
+            as_float64(st.q_nb), as_float64(st.v_n), as_float64(w_in), as_float64(w_m), gyro is not None, p,
+            self._att, self._dv, self._eps, p.dtype.type(self._rate_var), self._rate_var + self._bias_var)
         if self._pos is not None:
             r_m, r_n = earth.radii(st.lat)
             i_lon, i_lat = self._pos
             pose[0, 0] = p[i_lon, i_lon] * (float(r_n) + st.h) ** 2 * math.cos(st.lat) ** 2
             pose[1, 1] = p[i_lat, i_lat] * (float(r_m) + st.h) ** 2
-        att = self._att
-        pose[3:, 3:] = p[att, att]
-        twist = np.zeros((6, 6))
-        if self._dv is not None:
-            twist[:3, :3] = c.T @ p[self._dv] @ c
-        else:
-            twist[0, 0] = twist[1, 1] = twist[2, 2] = UNKNOWN
-        bias = np.diagonal(p)[self._eps] if self._eps is not None else np.full(3, self._bias_var)
-        twist[3:, 3:] = np.diag(self._rate_var + bias)
         return Odometry(p_w, v_b, w_b, pose, twist)
 
 
@@ -190,3 +185,35 @@ def prior_estimate(e: Estimate, mu_sigma: np.ndarray, p0: np.ndarray, att: slice
         e, misalignment=np.zeros(3), misalignment_sigma=mu_sigma.copy(), q_nb=q, attitude_cov=p0[att, att].copy(),
         x=np.zeros(len(e.x)), sigma=np.sqrt(np.diag(p0)), bias_gyro=np.zeros(3), bias_accel=np.zeros(3),
         nis=math.nan, p_w=None, v_b=None, w_b=None, pose_cov=None, twist_cov=None, state=np.zeros(len(e.x)))
+
+
+@kernel
+def odometry_parts(q_nb, v_n, w_in, w_m, has_rate, p, att, dv, eps, rate_var, rate_bias_var):
+    """(v_b, w_b (3,), pose_cov, twist_cov (6, 6)) of OdometryMaker.make: q_nb (4,), v_n, the nav
+    frame's rate w_in and the measured rate w_m = gyro - bias (3,); has_rate False: w_b is zero;
+    p (n, n) the filter's covariance (float64 or float32); att, dv, eps: the indices (3,) of the
+    attitude, velocity and gyro bias states (dv, eps empty: the model lacks them, velocity
+    unknown, the bias variance given); rate_var the gyro noise's variance in p's dtype (the sum
+    with a bias variance is taken in it, as numpy adds a float to a float32 array),
+    rate_bias_var its sum with the given bias variance. Position: unknown (the caller fills it).
+    The products are numpy's: C^T v and C^T P_v C through the same BLAS calls."""
+    c = np.array(quat_to_dcm_k((q_nb[0], q_nb[1], q_nb[2], q_nb[3]))).reshape(3, 3)
+    ct = c.T
+    v_b = np.dot(ct, v_n)
+    w_b = w_m - np.dot(ct, w_in) if has_rate else np.zeros(3)
+    pose = np.zeros((6, 6))
+    twist = np.zeros((6, 6))
+    pv = np.empty((3, 3))
+    for i in range(3):
+        pose[i, i] = UNKNOWN
+        for j in range(3):
+            pose[3 + i, 3 + j] = p[att[i], att[j]]
+            if dv.shape[0] == 3:
+                pv[i, j] = p[dv[i], dv[j]]
+    if dv.shape[0] == 3:
+        twist[:3, :3] = np.dot(np.dot(ct, pv), c)
+    for i in range(3):
+        if dv.shape[0] != 3:
+            twist[i, i] = UNKNOWN
+        twist[3 + i, 3 + i] = rate_var + p[eps[i], eps[i]] if eps.shape[0] == 3 else rate_bias_var
+    return v_b, w_b, pose, twist
