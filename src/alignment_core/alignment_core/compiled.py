@@ -85,9 +85,12 @@ FLOAT64 = np.dtype(np.float64)
 equality, which converts its operand; a byte-swapped float64 is not it and is converted)."""
 
 
+_NDARRAY = np.ndarray
+
+
 def as_float64(a: Any) -> np.ndarray:
     """a as a float64 numpy array for a kernel (no copy when it is one already)."""
-    return a if type(a) is np.ndarray and a.dtype is FLOAT64 else np.asarray(a, dtype=np.float64)
+    return a if type(a) is _NDARRAY and a.dtype is FLOAT64 else np.asarray(a, dtype=np.float64)
 
 
 class Kernel:

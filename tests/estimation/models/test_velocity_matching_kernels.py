@@ -60,3 +60,40 @@ def test_relative_misalignment_compiled_equals_interpreted_and_is_the_log():
         assert _same(mu, want[0]) and _same(sigma, want[1])
         assert np.allclose(mu, phi, rtol=0.0, atol=1e-15)
         assert np.allclose(sigma, np.sqrt(np.diag(c_na.T @ p @ c_na)), rtol=1e-14, atol=0.0)
+
+
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+@pytest.mark.parametrize('n', [12, 15])
+def test_feedback_is_the_numpy_feedback(dtype, n):
+    """C <- exp([phi x]) C (scipy's rotation composed on the left), V - dV, the biases plus their
+    estimates, the state zeroed but the master's: numpy's arithmetic on the float64 of x, bit for
+    bit, compiled and interpreted."""
+    import dataclasses
+
+    from scipy.spatial.transform import Rotation
+
+    from alignment_core.estimation.config import FilterConfig
+    from alignment_core.estimation.models.base import Corrections
+    from alignment_core.geometry.rotations_compiled import rotate_attitude
+    from alignment_core.navigation.strapdown import NavState
+    model = vm.VelocityMatching(dataclasses.replace(FilterConfig(), model=f'vm{n}'), n == 15)
+    rng = np.random.default_rng(23)
+    for k in range(100):
+        q = Rotation.random(random_state=k).as_quat()
+        v, bg, ba = rng.standard_normal(3) * 10, rng.standard_normal(3) * 1e-5, rng.standard_normal(3) * 1e-3
+        x = (rng.standard_normal(n) * 1e-3).astype(dtype)
+        nav = NavState(q_nb=q.copy(), v_n=v.copy(), lat=0.6, lon=2.0, h=10.0)
+        corr = Corrections(bg=bg.copy(), ba=ba.copy())
+        x_new = model.feedback(x, np.eye(n), None, nav, corr)
+        assert np.array_equal(nav.q_nb, rotate_attitude(q, x[0:3]))
+        np.testing.assert_allclose(Rotation.from_quat(nav.q_nb).as_matrix(),
+                                   (Rotation.from_rotvec(x[0:3].astype(float)) * Rotation.from_quat(q)).as_matrix(),
+                                   atol=1e-15)
+        assert np.array_equal(nav.v_n, v - x[3:6]) and np.array_equal(corr.bg, bg + x[6:9])
+        assert np.array_equal(corr.ba, ba + x[9:12])
+        want = np.zeros(n)
+        want[12:] = x[12:]
+        assert _same(x_new, want)
+        got = vm._feedback.py_func(q, v, bg, ba, x.astype(float))
+        for a, b in zip(got, (nav.q_nb, nav.v_n, corr.bg, corr.ba, x_new)):
+            assert _same(a, b)

@@ -48,7 +48,7 @@ from alignment_core.geometry.rotations import (
     skew_into,
     skew_values,
 )
-from alignment_core.geometry.rotations_compiled import quat_to_dcm_k, rotate_attitude, rotvec_to_dcm_k
+from alignment_core.geometry.rotations_compiled import quat_to_dcm_k, rotate_attitude_k, rotvec_to_dcm_k
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import ARCMIN, DEG, DPH, UG
 
@@ -223,12 +223,8 @@ class VelocityMatching(ErrorModel):
     def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         """C <- (I + [phi x]) C (exactly: exp([phi x]) C), V <- V - dV, biases accumulate;
         the master's attitude error is not fed back (it is the master's)."""
-        nav.q_nb = rotate_attitude(nav.q_nb, x[0:3])
-        nav.v_n = nav.v_n - x[3:6]
-        corr.bg = corr.bg + x[6:9]
-        corr.ba = corr.ba + x[9:12]
-        x_new = np.zeros(self._n)
-        x_new[12:] = x[12:]
+        nav.q_nb, nav.v_n, corr.bg, corr.ba, x_new = _feedback(
+            as_float64(nav.q_nb), as_float64(nav.v_n), as_float64(corr.bg), as_float64(corr.ba), as_float64(x))
         return x_new
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
@@ -236,6 +232,16 @@ class VelocityMatching(ErrorModel):
         and the sigma of phi - phi_m."""
         return _misalignment(as_float64(nav.q_nb), np.ascontiguousarray(nominal_attitude(m), dtype=np.float64),
                              as_float64(x), p, self._n == 15)
+
+
+@kernel
+def _feedback(q_nb, v_n, bg, ba, x):
+    """VelocityMatching.feedback compiled: (q_nb turned by phi = x[0:3] (rotate_attitude),
+    v_n - x[3:6], bg + x[6:9], ba + x[9:12], the state kept: zero but x[12:]); float64 operands
+    (a float32 state taken exactly, as numpy promotes it)."""
+    x_new = np.zeros(x.shape[0])
+    x_new[12:] = x[12:]
+    return rotate_attitude_k(q_nb, x[0:3]), v_n - x[3:6], bg + x[6:9], ba + x[9:12], x_new
 
 
 @kernel
