@@ -266,7 +266,7 @@ def test_a_blind_stroke_that_ramps_up_is_dated_at_the_start_of_its_ramp(ramp_s):
 def test_the_window_kernels_are_numpys_arithmetic():
     """The speed, the window's running sum and its mean's speed: numpy's own operations (v @ v,
     total -= old, total += new, total / count) bit for bit, compiled and interpreted."""
-    from alignment_core.estimation.launch_detection import mean_norm, norm3, slide
+    from alignment_core.estimation.launch_detection import mean_speed, norm3, slide
     rng = np.random.default_rng(3)
     total = np.zeros(3)
     want = np.zeros(3)
@@ -283,4 +283,4 @@ def test_the_window_kernels_are_numpys_arithmetic():
         window.append(v)
         assert np.array_equal(total, want)
         mean = want / 25
-        assert mean_norm(total, 25) == mean_norm.py_func(total, 25) == float(np.sqrt(mean @ mean))
+        assert mean_speed(total, 25) == mean_speed.py_func(total, 25) == float(np.sqrt(mean @ mean))

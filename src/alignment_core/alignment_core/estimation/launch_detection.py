@@ -276,7 +276,7 @@ class LaunchDetector:
         w = lim.creep_window
         if lim.creep_mps <= 0.0 or len(self._recent) < w:
             return False
-        if mean_norm(self._recent_sum, w) <= 0.5 * lim.creep_mps:
+        if mean_speed(self._recent_sum, w) <= 0.5 * lim.creep_mps:
             return False
         return self._median_speed() > lim.creep_mps
 
@@ -307,7 +307,7 @@ def slide(total, old, new, full):
 
 
 @kernel
-def mean_norm(total, count):
+def mean_speed(total, count):
     """|total / count| of a window's sum (3,) over its count of samples (total / count, then its
     norm as norm3)."""
     mean = total / float(count)
