@@ -22,6 +22,8 @@ step the three samples are pushed and process() runs; median over the steps afte
 tenth, best of --repeat. Filter: our KalmanFilter (Joseph form) and filterpy's on the same
 n = 15, m = 3 workload with the engine's measurement matrix H = [0 I 0 0 -[u x]], median per
 predict + update, best of --repeat, interleaved. pyins: bench/monte_carlo.py's peer workload.
+Monte Carlo: each scenario (of each tree) first runs 10 s untimed (`--child warm`), so that no timed
+run compiles kernels (their disk cache is keyed by the package's sources).
 Graph: --graph-runs runs of the default scenario through scripts/run_graph.sh at
 --real-time-factor 0 (bench/graph_rtf.py's run; today's tree only: REV's would need its own
 built workspace), each with its whole-run RTF, start-up (command to first message recorded),
@@ -150,6 +152,16 @@ def mc_rpm(runs: int, workers: int, scenario: str) -> dict:
     return {'wall_s': wall, 'runs_per_min': 60.0 * runs / wall, 'cpu_s_per_run': (cpu() - c) / runs}
 
 
+def warm(scenario: str) -> dict:
+    """A short run of the scenario, untimed: its kernels compiled into the disk cache (keyed by the
+    package's sources: a commit that changed them compiles afresh) before a timed run loads them."""
+    from alignment_core import pipeline
+    from alignment_core.config import scenario as scenarios
+    t = time.perf_counter()
+    pipeline.run(scenarios.load(scenario, {'duration_s': 10.0}), keep_truth=False)
+    return {'warm_s': time.perf_counter() - t}
+
+
 def batch_memory() -> dict:
     """Peak RSS of the batch pipeline on a 300 s and a 1 h `deck` run (bench/batch_memory.py's children)
     and the line through them."""
@@ -167,6 +179,8 @@ def child(part: str, a: argparse.Namespace) -> None:
         out = kf_us(a.kf_steps, a.repeat)
     elif part == 'pyins':
         out = pyins_us(a.peer_seconds)
+    elif part == 'warm':
+        out = warm(a.scenario)
     elif part.startswith('mc'):
         out = mc_rpm(a.runs, int(part[2:]), a.scenario)
     else:
@@ -244,6 +258,9 @@ def main() -> None:
         eng = {name: run('engine', a, pp) for name, pp in trees.items()}
         kf = run('kf', a, None)
         peer = run('pyins', a, None)
+        for sc in a.mc_scenarios:
+            for pp in trees.values():
+                run('warm', a, pp, sc)
         mc = {(sc, name, w): run(f'mc{w}', a, pp, sc) for sc in a.mc_scenarios for w in (1, 2)
               for name, pp in trees.items()}
         from graph_rtf import graph as graph_run  # bench/graph_rtf.py: run_graph.sh at a real-time factor
