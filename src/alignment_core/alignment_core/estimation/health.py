@@ -12,6 +12,7 @@ from alignment_core.compiled import kernel
 OK, WARN, ERROR = 0, 1, 2          # DiagnosticStatus.OK / WARN / ERROR
 LEVEL_NAMES = ('OK', 'WARN', 'ERROR')
 
+
 def finite(*arrays: np.ndarray) -> bool:
     """True if every element is finite. Small vectors (the samples' 3- and 4-vectors) are summed
     as Python floats (~0.3 us; a NaN or inf makes the sum non-finite); other float arrays are

@@ -1,5 +1,6 @@
 """The float forms of rotations.py compiled (compiled.py), for the kernels that call them: the
-same functions, so a kernel's rotations are the interpreted code's, bit for bit."""
+same functions, so a kernel's rotations are the interpreted code's, bit for bit. Also the
+error-state models' attitude feedback on arrays (rotate_attitude), their composition compiled."""
 from __future__ import annotations
 
 import numpy as np
