@@ -93,6 +93,12 @@ def as_float64(a: Any) -> np.ndarray:
     return a if type(a) is _NDARRAY and a.dtype is FLOAT64 else np.asarray(a, dtype=np.float64)
 
 
+def as_float(a: Any) -> np.ndarray:
+    """a as a float64 or float32 numpy array for a kernel, a float32 one kept in its precision
+    (a filter's single-precision covariance); anything else as float64."""
+    return a if type(a) is _NDARRAY and a.dtype.char in 'fd' else np.asarray(a, dtype=np.float64)
+
+
 class Kernel:
     """A kernel before numba is imported: calling it (or reading a dispatcher attribute such as
     `signatures`) makes every kernel's dispatcher (`activate`)."""

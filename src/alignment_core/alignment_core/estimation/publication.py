@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from alignment_core.compiled import as_float64, kernel
+from alignment_core.compiled import as_float, as_float64, kernel
 from alignment_core.estimation.health import ERROR, OK, finite
 from alignment_core.estimation.matching import LiveSolution, MatchResults
 from alignment_core.estimation.models import ErrorModel
@@ -64,7 +64,7 @@ class OdometryMaker:
         w_in = earth.omega_ie_n(st.lat) + earth.omega_en_n(st.lat, st.h, st.v_n)
         p_w = np.asarray(self._plane.from_geodetic(st.lat, st.lon, st.h), dtype=float).reshape(3)
         w_m = w_in if gyro is None else gyro - bg
-        p = p if type(p) is np.ndarray and p.dtype.char in 'fd' else np.asarray(p, dtype=float)
+        p = as_float(p)
         v_b, w_b, pose, twist = odometry_parts(
             as_float64(st.q_nb), as_float64(st.v_n), as_float64(w_in), as_float64(w_m), gyro is not None, p,
             self._att, self._dv, self._eps, p.dtype.type(self._rate_var), self._rate_var + self._bias_var)

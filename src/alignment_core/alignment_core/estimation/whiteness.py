@@ -23,7 +23,7 @@ import numpy as np
 # same numbers): importing scipy.stats costs a node ~1 s of start-up
 from scipy.special import chdtrc
 
-from alignment_core.compiled import as_float64, kernel
+from alignment_core.compiled import as_float, as_float64, kernel
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,7 @@ class InnovationWhiteness:
     def add(self, innovation: np.ndarray, s: np.ndarray) -> WhitenessResult | None:
         """One accepted update's innovation (m,) and its covariance S (m, m); the window's result
         when it completes. A change of m (rows added or dropped) restarts the window."""
-        ok, e = normalised(as_float64(innovation), _array(s))
+        ok, e = normalised(as_float64(innovation), as_float(s))
         if not ok:
             return None
         if self._rows and len(self._rows[0]) != len(e):
@@ -103,12 +103,6 @@ class InnovationWhiteness:
         return {'whiteness': 'fail' if r.failed else 'pass', 'whiteness_q': r.q, 'whiteness_dof': r.dof,
                 'whiteness_p': r.p, 'whiteness_r1_max': r.r1_max, 'whiteness_band': r.band,
                 'whiteness_windows': self.completed, 'whiteness_windows_failed': self.failures}
-
-
-def _array(s) -> np.ndarray:
-    """s as an ndarray (float64 or float32 kept: its variances' square roots are taken in its own
-    precision, as numpy's would be)."""
-    return s if type(s) is np.ndarray and s.dtype.char in 'fd' else np.asarray(s, dtype=float)
 
 
 @kernel

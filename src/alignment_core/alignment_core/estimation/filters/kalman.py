@@ -16,8 +16,7 @@ _INF = float('inf')
 def _ready(a, dtype: np.dtype) -> np.ndarray:
     """a in dtype, in one block of memory (C or Fortran order): a kernel's BLAS call would copy
     any other layout itself, with a performance warning."""
-    if type(a) is not np.ndarray or a.dtype is not dtype:      # as_dtype, inlined: once per operand
-        a = np.asarray(a, dtype=dtype)
+    a = as_dtype(a, dtype)
     flags = a.flags
     return a if flags.c_contiguous or flags.f_contiguous else np.ascontiguousarray(a)
 
