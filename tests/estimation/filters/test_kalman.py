@@ -107,3 +107,34 @@ def test_a_negative_nis_is_a_breakdown_not_an_accepted_update():
     with pytest.raises(np.linalg.LinAlgError):
         kf.update(np.array([1.0]), np.array([[1.0, 0.0]]), np.array([[1.0]]))
     assert kf.n_updates == 0 and np.array_equal(kf.x, np.zeros(2))
+
+
+
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+def test_arrays_handed_out_or_given_are_never_changed_by_later_steps(dtype):
+    """The filter steps x and P in place, copy on write: what `x` and `P` returned, and what was
+    assigned to them, keep their values through later predicts and updates (accepted and gated),
+    while the state moves as it does in a filter never read (stepped alongside, bit for bit)."""
+    rng = np.random.default_rng(5)
+    n, m = 6, 2
+    phi = np.eye(n) + 0.05 * rng.standard_normal((n, n))
+    qd = np.eye(n) * 1e-3
+    h, r = rng.standard_normal((m, n)), np.eye(m) * 0.1
+    x0, p0 = rng.standard_normal(n), random_spd(rng, n)
+    zs = rng.standard_normal((8, m))
+    read, unread = KalmanFilter(np.zeros(n), np.eye(n), dtype), KalmanFilter(x0, p0, dtype)
+    given_x, given_p = np.array(x0, dtype=dtype), np.array(p0, dtype=dtype)
+    read.x, read.P = given_x, given_p
+    kept = []
+    for k, z in enumerate(zs):
+        for f in (read, unread):
+            f.predict(phi, qd)
+            f.update(z, h, r, gate_chi2=1e-9 if k == 3 else None)       # the fourth is gated
+        x_out, p_out = read.x, read.P
+        kept.append((x_out, x_out.copy(), p_out, p_out.copy()))
+    assert read.n_gated == 1 and read.n_updates == len(zs) - 1
+    for x_out, x_then, p_out, p_then in kept:
+        assert np.array_equal(x_out, x_then) and np.array_equal(p_out, p_then)
+    assert np.array_equal(given_x, np.array(x0, dtype=dtype)) and np.array_equal(given_p, np.array(p0, dtype=dtype))
+    assert np.array_equal(read.x, unread.x) and np.array_equal(read.P, unread.P)
+    assert not np.array_equal(read.P, kept[0][3])

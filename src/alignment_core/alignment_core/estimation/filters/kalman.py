@@ -13,9 +13,14 @@ __all__ = ['KalmanFilter', 'UpdateResult']
 _INF = float('inf')
 
 
+_NDARRAY = np.ndarray
+
+
 def _ready(a, dtype: np.dtype) -> np.ndarray:
     """a in dtype, in one block of memory (C or Fortran order): a kernel's BLAS call would copy
     any other layout itself, with a performance warning."""
+    if type(a) is _NDARRAY and a.dtype is dtype and a.flags.c_contiguous:     # the usual case
+        return a
     a = as_dtype(a, dtype)
     flags = a.flags
     return a if flags.c_contiguous or flags.f_contiguous else np.ascontiguousarray(a)
@@ -28,43 +33,64 @@ class KalmanFilter(Counters):
     (matrix products, the inverse of S) is single precision.
 
     Speed: predict and update run as compiled kernels (kalman_kernels.py): the products with H
-    over its non-zero cells only, the Joseph form in O(m n^2) operations instead of O(n^3)."""
+    over its non-zero cells only, the Joseph form in O(m n^2) operations instead of O(n^3).
+    They write x and P in place, copy on write: an array the filter has handed out (read as
+    `x` or `P`) or been given (assigned) is never changed by it; the next step first copies it.
+    A filter stepped without being read allocates nothing for x and P, and a kernel's returned
+    array costs more than its arithmetic at this size (numba builds a Python object for it)."""
 
     def __init__(self, x0: np.ndarray, p0: np.ndarray, dtype=np.float64) -> None:
         self.dtype = np.dtype(dtype)
         self._x = np.array(x0, dtype=self.dtype)
         self._P = np.array(p0, dtype=self.dtype)
+        self._x_out = self._p_out = False         # handed out or given: copy before writing
         self._init_counters()
 
     @property
     def x(self) -> np.ndarray:
         """The state (n,). Assigned from outside (the engine's feedback) it is kept in the filter's
         dtype: a float32 filter stays single precision (an array of its dtype is kept as it is)."""
+        self._x_out = True
         return self._x
 
     @x.setter
     def x(self, value: np.ndarray) -> None:
         self._x = as_dtype(value, self.dtype)
+        self._x_out = True
 
     @property
     def P(self) -> np.ndarray:
         """The covariance (n, n); assigned from outside (launch noise, a bridged gap, a velocity
         reset) it is kept in the filter's dtype, as x."""
+        self._p_out = True
         return self._P
 
     @P.setter
     def P(self, value: np.ndarray) -> None:
         self._P = as_dtype(value, self.dtype)
+        self._p_out = True
 
     def reset_state(self, x: np.ndarray | None = None) -> None:
         """Closed-loop feedback: x <- 0 (or x); P is untouched."""
         self._x = np.zeros_like(self._x) if x is None else np.array(x, dtype=self.dtype)
+        self._x_out = False
+
+    def _own(self) -> None:
+        """Make x and P the filter's own C-ordered arrays, which the kernels may overwrite."""
+        if self._x_out:
+            self._x = np.array(self._x, dtype=self.dtype, order='C')
+            self._x_out = False
+        if self._p_out:
+            self._P = np.array(self._P, dtype=self.dtype, order='C')
+            self._p_out = False
 
     def predict(self, phi: np.ndarray, qd: np.ndarray) -> None:
         """x <- Phi x, P <- Phi P Phi^T + Qd (symmetric by construction up to round-off, which
         the next update's symmetrisation removes)."""
         dt = self.dtype
-        self._x, self._P = kernels.predict(self._x, self._P, _ready(phi, dt), _ready(qd, dt))
+        if self._x_out or self._p_out:
+            self._own()
+        kernels.predict(self._x, self._P, _ready(phi, dt), _ready(qd, dt))
         self.n_predicts += 1
 
     def _innovation(self, z, h, r, x, p):
@@ -77,9 +103,11 @@ class KalmanFilter(Counters):
         z, h, r = _ready(z, dt), _ready(h, dt), _ready(r, dt)
         if z.ndim == 0:                       # one measurement given as a scalar
             z = z.reshape(1)
+        if self._x_out or self._p_out:
+            self._own()
         try:
-            y, s, nis, accepted, x, p = kernels.update(self._x, self._P, z, h, r,
-                                                       _INF if gate_chi2 is None else gate_chi2)
+            y, s, nis, accepted = kernels.update(self._x, self._P, z, h, r,
+                                                 _INF if gate_chi2 is None else gate_chi2)
         except np.linalg.LinAlgError:           # S singular
             nis = math.nan
         if not 0.0 <= nis < _INF:
@@ -88,7 +116,6 @@ class KalmanFilter(Counters):
         if not accepted:
             self.n_gated += 1
             return UpdateResult(y, s, nis, False)
-        self._x, self._P = x, p
         self.n_updates += 1
         return UpdateResult(y, s, nis, True)
 
@@ -96,4 +123,7 @@ class KalmanFilter(Counters):
         """x += K y, P <- (I - K H) P (I - K H)^T + K R K^T, symmetrised (the same operations as
         update(), for the subclasses that change the prior before updating)."""
         dt = self.dtype
-        self._x, self._P = kernels.joseph(self._x, self._P, ph, s_inv, y, _ready(h, dt), _ready(r, dt))
+        h, r = _ready(h, dt), _ready(r, dt)
+        if self._x_out or self._p_out:
+            self._own()
+        kernels.joseph(self._x, self._P, ph, s_inv, y, h, r)

@@ -55,8 +55,9 @@ def _overloads() -> None:
 
 @kernel
 def predict(x, p, phi, qd):
-    """(Phi x, Phi P Phi^T + Qd)."""
-    return dot(phi, x), dot(dot(phi, p), phi.T) + qd
+    """x <- Phi x, P <- Phi P Phi^T + Qd, in place."""
+    x[:] = dot(phi, x)
+    p[:] = dot(dot(phi, p), phi.T) + qd
 
 
 @kernel
@@ -86,29 +87,30 @@ def innovation(x, p, z, h, r):
 
 @kernel
 def update(x, p, z, h, r, gate):
-    """One measurement update: (y, S, nis, accepted, x+, P+). Not accepted (x+, P+ are x, P)
-    when nis > gate, or when S is not finite (nis is then NaN). A singular S raises
-    np.linalg.LinAlgError."""
+    """One measurement update: (y, S, nis, accepted), x <- x+ and P <- P+ in place if accepted.
+    Not accepted when nis > gate, when S is not finite (nis is then NaN) or when nis < 0 (S not
+    positive definite: the caller raises). A singular S raises np.linalg.LinAlgError; x and P are
+    unchanged unless accepted."""
     y, ph, s = innovation(x, p, z, h, r)
     if not np.all(np.isfinite(s)):
-        return y, s, np.nan, False, x, p
+        return y, s, np.nan, False
     s_inv = inverse(s)
     nis = float(dot(dot(y, s_inv), y))
-    if not nis < np.inf or nis > gate:
-        return y, s, nis, False, x, p
-    x_new, p_new = joseph(x, p, ph, s_inv, y, h, r)
-    return y, s, nis, True, x_new, p_new
+    if not 0.0 <= nis < np.inf or nis > gate:
+        return y, s, nis, False
+    joseph(x, p, ph, s_inv, y, h, r)
+    return y, s, nis, True
 
 
 @kernel
 def joseph(x, p, ph, s_inv, y, h, r):
-    """(x + K y, sym((I - K H) P (I - K H)^T + K R K^T)) with K = P H^T S^-1; ph = P H^T,
-    sym(A) = (A + A^T) / 2. The Joseph form is evaluated in O(m n^2), without the n x n
-    products of I - K H: A = (I - K H) P = P - K (H P), then
+    """In place: x <- x + K y, P <- sym((I - K H) P (I - K H)^T + K R K^T) with K = P H^T S^-1;
+    ph = P H^T, sym(A) = (A + A^T) / 2. The Joseph form is evaluated in O(m n^2), without the
+    n x n products of I - K H: A = (I - K H) P = P - K (H P), then
     A (I - K H)^T + K R K^T = A + (K R - A H^T) K^T; H's zero cells are skipped (a selecting
     H costs a copy of its rows). Every element is accumulated in P's dtype."""
     k = dot(ph, s_inv)
-    x_new = x + dot(k, y)
+    x[:] = x + dot(k, y)
     n = p.shape[0]
     m = h.shape[0]
     kt = np.ascontiguousarray(k.T)                 # (m, n)
@@ -137,7 +139,5 @@ def joseph(x, p, ph, s_inv, y, h, r):
             v = d[i, j]
             for c in range(n):
                 a[i, c] += v * kt[j, c]
-    p_new = a + a.T
-    p_new *= 0.5
-    return x_new, p_new
-
+    p[:] = a + a.T
+    p *= 0.5
