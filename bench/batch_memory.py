@@ -37,6 +37,13 @@ heap not handed back): per-sample Python records with small numpy arrays: LDV 13
 estimates 122 (3.5 kB each, 10 Hz), master 114 MiB/h (368-664 B per sample for 48-104 B of
 numbers); the arrays: ship batch 55, aircraft truth 36, sensor truth 29, the filter's LDV history
 16.5 MiB/h.
+
+Measured 2026-12-04 (load average below 1; durations 300 and 1800 s): the code above gave peak ~
+189 MiB + 1427 MiB per simulated hour, reached inside simulate. Since then the slave IMU's synthesis
+and align's decoding of the LDV stream run 6000 samples (60 s) at a time (`pipeline.BATCH_SAMPLES`,
+the same numbers bit for bit): peak ~ 206 MiB + 838 MiB/h, reached in align at both durations, where
+the RSS after align is ~ 206 + 839 MiB/h; the 1800 s run's peak 624.8 against 902.9 MiB, its wall
+time 42.4 against 50.6 s (simulate 9.2 against 13.2 s).
 """
 from __future__ import annotations
 
@@ -279,7 +286,8 @@ def main() -> int:
     peaks = np.array([r['child_maxrss_mib'] for r in runs])
     in_sim = [r['simulate_peak_mib'] >= r['child_maxrss_mib'] - 0.5 for r in runs]
     where = ('inside simulate at every duration' if all(in_sim) else
-             f'inside simulate at {", ".join(f"{d:g}" for d, i in zip(durations, in_sim) if i) or "no"} s, '
+             'in align at every duration' if not any(in_sim) else
+             f'inside simulate at {", ".join(f"{d:g}" for d, i in zip(durations, in_sim) if i)} s, '
              'in align otherwise')
     if len(runs) >= 2:
         k, c = np.polyfit(hours, peaks, 1)

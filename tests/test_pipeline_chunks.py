@@ -2,7 +2,7 @@
 split of a run into chunks gives every AircraftTruth, ImuSample and bias row bit for bit, with
 the state carried across chunks (the gear's integrator and gusts, the deck flexure, the catapult
 release and the flight path, the IMU error model's noise, bias processes and quantiser); and
-run_batch (the pipeline) gives the same numbers as stepping.
+run_batch (the pipeline, in batches of any size) gives the same numbers as stepping.
 
 Short runs with the events inside: the catapult's hold-back and launch, a free flight after the
 papers' stroke, flight segments after a release, an airborne start, and the optional IMU errors."""
@@ -124,9 +124,13 @@ def test_steps_continue_chunks(stepped):
             k += 1
 
 
-def test_batch_equals_steps(stepped):
-    """The pipeline's run_batch gives the numbers the node's stepping gives."""
+@pytest.mark.parametrize('batch', [None, 1, 7, 250])
+def test_batch_equals_steps(stepped, batch, monkeypatch):
+    """The pipeline's run_batch gives the numbers the node's stepping gives, whatever the size of
+    the batches it makes (None: its own, longer than these runs)."""
     sc, (ships, truths, imus, biases) = stepped
+    if batch is not None:
+        monkeypatch.setattr(pipeline, 'BATCH_SAMPLES', batch)
     stage = pipeline.SlaveImuStage(sc)
     truth, imu = stage.run_batch(ShipBatch.of(ships))
     for k, t in enumerate(truths):
@@ -136,3 +140,4 @@ def test_batch_equals_steps(stepped):
     for k in range(1, len(ships)):
         _assert_imu(imu[k - 1], imus[k], k)
         assert _same(stage.errors.last_bias[k - 1], biases[k])
+    assert len(imu) == len(stage.errors.last_bias) == len(ships) - 1 and stage.prev is not None

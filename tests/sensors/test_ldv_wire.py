@@ -82,3 +82,9 @@ def test_a_stream_decodes_to_the_bits_of_each_matrix_decomposed_alone():
     assert sum(s.beam is not None for s in stream) == 240
     assert sum(not s.valid for s in stream) == 80
     assert ldv_wire.transmitted_all([]) == []
+    for batch in (1, 7, len(samples), 10 * len(samples)):   # the batch pipeline's stream, batch by batch
+        streamed = list(ldv_wire.transmitted_stream(samples, batch))
+        assert len(streamed) == len(samples)
+        for a, b in zip(streamed, stream):
+            _same_bits(a, b)
+    assert list(ldv_wire.transmitted_stream([], 7)) == []

@@ -47,6 +47,12 @@ def truth_records(sb: ShipBatch, d: dict[str, np.ndarray]) -> list[AircraftTruth
             for k in range(len(sb))]
 
 
+BATCH_SAMPLES = 6000
+"""Samples per batch of the slave IMU's synthesis and of the LDV stream's decoding in the batch
+pipeline (60 s at 100 Hz): their temporaries, some 2 kB per sample, stay this size (12 MB)
+instead of growing with the run."""
+
+
 class SlaveImuStage:
     """Ship sample in -> aircraft truth and (from the second sample on) a slave IMU sample."""
 
@@ -57,13 +63,27 @@ class SlaveImuStage:
         self.prev: ShipSample | None = None
 
     def run_batch(self, sb: ShipBatch) -> tuple[dict[str, np.ndarray], list[ImuSample]]:
-        """All samples at once (same numbers as calling `step` on each in turn)."""
+        """All samples of a run, batched BATCH_SAMPLES at a time (the same numbers as calling `step`
+        on each in turn, for any batch size: `step_many`), so that the kinematics' per-sample
+        temporaries (rotations, the quadrature nodes' rates and forces) stay a batch's size
+        instead of growing with the run. Afterwards `errors.last_bias` holds the run's biases, one
+        row (6,) per IMU sample."""
         tau = (sb.t_ns - self.t0) / 1e9
-        truth = self.kin.truth_batch(sb, tau)
-        dth, dv = self.kin.increments_batch(sb.slice(slice(0, -1)), sb.slice(slice(1, None)),
-                                            tau[:-1], tau[1:])
-        gyro, accel = self.errors.measure_batch(dth, dv, tau[1:] - tau[:-1])
-        imu = [ImuSample(*rows) for rows in zip(sb.t_ns[1:].tolist(), gyro, accel)]
+        truths: list[dict[str, np.ndarray]] = []
+        imu: list[ImuSample] = []
+        biases = [np.zeros((0, 6))]
+        for a in range(0, len(sb), BATCH_SAMPLES):
+            b = min(a + BATCH_SAMPLES, len(sb))
+            truths.append(self.kin.truth_batch(sb.slice(slice(a, b)), tau[a:b]))
+            lo = max(a - 1, 0)                          # the interval ending at sample a starts at a - 1
+            if lo + 1 < b:
+                dth, dv = self.kin.increments_batch(sb.slice(slice(lo, b - 1)), sb.slice(slice(lo + 1, b)),
+                                                    tau[lo:b - 1], tau[lo + 1:b])
+                gyro, accel = self.errors.measure_batch(dth, dv, tau[lo + 1:b] - tau[lo:b - 1])
+                imu.extend(ImuSample(*rows) for rows in zip(sb.t_ns[lo + 1:b].tolist(), gyro, accel))
+                biases.append(self.errors.last_bias)
+        truth = {key: np.concatenate([t[key] for t in truths]) for key in truths[0]}
+        self.errors.last_bias = np.concatenate(biases)
         self.prev = sb.sample(len(sb) - 1)
         return truth, imu
 
@@ -174,16 +194,17 @@ def align(sc: Scenario, inp: Inputs, final: bool = True) -> TransferAlignment:
     """Feed the inputs to a fresh filter in the order the graph's nodes publish them, then
     flush it (final False: no flush, as a node that never learns its inputs ended)."""
     filt = TransferAlignment(sc.filter, plane_of(sc), sc.rate_hz)
-    j_ldv = j_master = j_dop = 0        # sensor streams with their own rate / latency: pushed by stamp
+    j_master = j_dop = 0                # sensor streams with their own rate / latency: pushed by stamp
     doppler = inp.doppler or []
-    ldv = ldv_wire.transmitted_all(inp.ldv)       # as the filter node decodes it from the messages
+    ldv = ldv_wire.transmitted_stream(inp.ldv, BATCH_SAMPLES)   # as the filter node decodes the messages
+    next_ldv = next(ldv, None)
     for k in range(len(inp.ships)):
         t = int(inp.ships.t_ns[k])
         if k > 0:
             filt.push_imu(inp.imu[k - 1])
-        while j_ldv < len(ldv) and ldv[j_ldv].t_ns <= t:
-            filt.push_ldv(ldv[j_ldv])
-            j_ldv += 1
+        while next_ldv is not None and next_ldv.t_ns <= t:
+            filt.push_ldv(next_ldv)
+            next_ldv = next(ldv, None)
         while j_dop < len(doppler) and doppler[j_dop].t_ns <= t:
             filt.push_doppler(doppler[j_dop])
             j_dop += 1

@@ -11,6 +11,7 @@ decoding, exactly what the filter node decodes from the message."""
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 
@@ -75,8 +76,16 @@ def transmitted(s: LdvSample) -> LdvSample:
 
 
 def transmitted_all(samples: list[LdvSample]) -> list[LdvSample]:
-    """`transmitted` of every sample (a batch run's whole LDV stream, decoded as one stack)."""
+    """`transmitted` of every sample (decoded as one stack)."""
     if not samples:
         return []
     wire = [encode(s) for s in samples]
     return decode_all([s.t_ns for s in samples], np.array([w[0] for w in wire]), np.array([w[1] for w in wire]))
+
+
+def transmitted_stream(samples: Sequence[LdvSample], batch: int) -> Iterator[LdvSample]:
+    """`transmitted` of every sample in turn, decoded `batch` at a time (each sample is decoded
+    on its own, so the batch size changes no bit): a batch run's whole LDV stream without a
+    decoded copy of all of it in memory."""
+    for a in range(0, len(samples), batch):
+        yield from transmitted_all(list(samples[a:a + batch]))
