@@ -21,7 +21,8 @@ measured). Engine: TransferAlignment on a simulated `deck_paper` run (--seconds 
 step the three samples are pushed and process() runs; median over the steps after the first
 tenth, best of --repeat. Filter: our KalmanFilter (Joseph form) and filterpy's on the same
 n = 15, m = 3 workload with the engine's measurement matrix H = [0 I 0 0 -[u x]], median per
-predict + update, best of --repeat, interleaved. pyins: bench/monte_carlo.py's peer workload.
+predict + update, best of --repeat, the two filters' blocks of 100 steps in turn. pyins:
+bench/monte_carlo.py's peer workload.
 Monte Carlo: each scenario (of each tree) first runs 10 s untimed (`--child warm`), so that no timed
 run compiles kernels (their disk cache is keyed by the package's sources).
 Graph: --graph-runs runs of the default scenario through scripts/run_graph.sh at
@@ -92,8 +93,15 @@ def kf_workload(steps: int, n: int = 15, m: int = 3, seed: int = 0):
     return phi, qd, h, r, np.eye(n) * 1e-2, zs
 
 
+KF_BLOCK = 100
+"""Steps of one filter timed in a row before the other's (`kf_us`)."""
+
+
 def kf_us(steps: int, repeat: int) -> dict:
-    """Median us per predict + update: ours (Joseph form) and filterpy's, best of repeat, interleaved."""
+    """Median us per predict + update: ours (Joseph form) and filterpy's, best of repeat. Each
+    filter steps on its own, in a loop, KF_BLOCK steps at a time, the two filters' blocks in turn,
+    so that both are timed under the same machine conditions (a shared machine's speed changes
+    within a run of 3000 steps of either alone)."""
     from filterpy.kalman import KalmanFilter as FpKF
 
     from alignment_core.estimation.filters import KalmanFilter
@@ -101,30 +109,24 @@ def kf_us(steps: int, repeat: int) -> dict:
     n, m = h.shape[1], h.shape[0]
     clock = time.perf_counter_ns
 
-    def ours() -> float:
+    def both() -> tuple[float, float]:
         f = KalmanFilter(np.zeros(n), p0)
-        ts = np.empty(len(zs))
-        for i, z in enumerate(zs):
-            t0 = clock()
-            f.predict(phi, qd)
-            f.update(z, h, r)
-            ts[i] = clock() - t0
-        return float(np.median(ts)) * 1e-3
-
-    def theirs() -> float:
-        f = FpKF(dim_x=n, dim_z=m)
-        f.F, f.Q, f.H, f.R, f.P = phi, qd, h, r, p0.copy()
-        ts = np.empty(len(zs))
-        for i, z in enumerate(zs):
-            t0 = clock()
-            f.predict()
-            f.update(z)
-            ts[i] = clock() - t0
-        return float(np.median(ts)) * 1e-3
-    a, b = [], []
-    for _ in range(repeat):
-        a.append(ours())
-        b.append(theirs())
+        g = FpKF(dim_x=n, dim_z=m)
+        g.F, g.Q, g.H, g.R, g.P = phi, qd, h, r, p0.copy()
+        ts, tg = np.empty(len(zs)), np.empty(len(zs))
+        for a in range(0, len(zs), KF_BLOCK):
+            for i in range(a, min(a + KF_BLOCK, len(zs))):
+                t0 = clock()
+                f.predict(phi, qd)
+                f.update(zs[i], h, r)
+                ts[i] = clock() - t0
+            for i in range(a, min(a + KF_BLOCK, len(zs))):
+                t0 = clock()
+                g.predict()
+                g.update(zs[i])
+                tg[i] = clock() - t0
+        return float(np.median(ts)) * 1e-3, float(np.median(tg)) * 1e-3
+    a, b = zip(*(both() for _ in range(repeat)))
     return {'ours_us': min(a), 'filterpy_us': min(b)}
 
 
