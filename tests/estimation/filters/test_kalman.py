@@ -138,3 +138,20 @@ def test_arrays_handed_out_or_given_are_never_changed_by_later_steps(dtype):
     assert np.array_equal(given_x, np.array(x0, dtype=dtype)) and np.array_equal(given_p, np.array(p0, dtype=dtype))
     assert np.array_equal(read.x, unread.x) and np.array_equal(read.P, unread.P)
     assert not np.array_equal(read.P, kept[0][3])
+
+
+def test_a_shallow_copy_steps_apart_from_its_original():
+    """copy.copy shares x and P; stepping the copy leaves the original where a filter stepped
+    alongside it is (neither is read before the end)."""
+    import copy
+    rng = np.random.default_rng(6)
+    n = 4
+    x0, p0 = rng.standard_normal(n), random_spd(rng, n)
+    a, same = KalmanFilter(x0, p0), KalmanFilter(x0, p0)
+    for f in (a, same):
+        f.predict(np.eye(n), np.eye(n) * 0.1)
+    b = copy.copy(a)
+    b.predict(np.eye(n) * 0.9, np.eye(n) * 0.2)
+    b.update(np.ones(1), np.ones((1, n)), np.eye(1))
+    assert np.array_equal(a.x, same.x) and np.array_equal(a.P, same.P)
+    assert not np.array_equal(b.P, same.P)

@@ -75,6 +75,14 @@ class KalmanFilter(Counters):
         self._x = np.zeros_like(self._x) if x is None else np.array(x, dtype=self.dtype)
         self._x_out = False
 
+    def __copy__(self) -> KalmanFilter:
+        """A shallow copy (copy.copy) shares x and P: both filters copy them before their next
+        write, so stepping one never changes the other."""
+        other = object.__new__(type(self))
+        other.__dict__.update(self.__dict__)
+        self._x_out = self._p_out = other._x_out = other._p_out = True
+        return other
+
     def _own(self) -> None:
         """Make x and P the filter's own C-ordered arrays, which the kernels may overwrite."""
         if self._x_out:
