@@ -39,7 +39,7 @@ class _DelayedFading(KalmanFilter):
 
     def __init__(self, x0, p0, dtype=np.float64) -> None:
         super().__init__(x0, p0, dtype)
-        self._p_post = self.P        # P+ after the last accepted update (arrays are never mutated)
+        self._p_post = self.P        # P+ after the last accepted update (an array read never changes)
         self._phi_acc: np.ndarray | None = None   # product of the Phi since then; None: no predict since
         self._p_written = self.P     # the P this object last wrote, to detect outside assignment
         self.last_fading: float | np.ndarray = 1.0
