@@ -116,8 +116,8 @@ class FlexureProcess:
 
     def at(self, k) -> tuple[np.ndarray, np.ndarray]:
         """(theta, theta') (…, 3) at sample indices k (…). The samples more than KEEP before the
-        least index asked for are let go (recent_rows.py): reads move forward in a node's run,
-        and a batch asks for everything at once."""
+        least index asked for are let go (recent_rows.py): reads move forward, in a node's run as
+        in the batch pipeline's batches."""
         k = np.asarray(k)
         if k.size:
             self._extend(int(k.max()))
