@@ -109,7 +109,6 @@ def test_a_negative_nis_is_a_breakdown_not_an_accepted_update():
     assert kf.n_updates == 0 and np.array_equal(kf.x, np.zeros(2))
 
 
-
 @pytest.mark.parametrize('dtype', [np.float64, np.float32])
 def test_arrays_handed_out_or_given_are_never_changed_by_later_steps(dtype):
     """The filter steps x and P in place, copy on write: what `x` and `P` returned, and what was
