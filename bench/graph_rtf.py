@@ -51,7 +51,7 @@ def graph(rtf: float, plots: bool = False) -> dict:
         same = same_as_batch(out, s)
         return {'same_estimate': same, 'rtf_setting': rtf, 'streaming_rtf': s['sim_time_s'] / span,
                 'whole_run_rtf': s['real_time_factor'], 'lost': s['lost_total'],
-                'messages': sum(s['topics'].values()), 'startup_s': s.get('startup_s'),
+                'messages': sum(s['topics'].values()), 'topics': s['topics'], 'startup_s': s.get('startup_s'),
                 'sim_time_s': s['sim_time_s'], 'cpu_s': cpu, 'ack_wait_s': ack, 'command_s': command_s}
 
 

@@ -29,7 +29,8 @@ Graph: --graph-runs runs of the default scenario through scripts/run_graph.sh at
 --real-time-factor 0 (bench/graph_rtf.py's run; today's tree only: REV's would need its own
 built workspace), each with its whole-run RTF, start-up (command to first message recorded),
 messages lost and every process's CPU seconds per simulated minute (the nodes' and the
-recorder's stats).
+recorder's stats); with them, the DDS transport's own CPU per message (bench/dds_cost.py: a
+publisher and its raw subscribers, each a process) and what it comes to in each graph run.
 Ratios are only meaningful within a run (a shared machine's load moves every absolute number);
 the Monte Carlo's CPU seconds per run (this process and its pool's workers) move less with the
 load than its wall time.
@@ -213,6 +214,17 @@ def run(part: str, a: argparse.Namespace, pythonpath: str | None, scenario: str 
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
+def transport(graphs: list[dict]) -> dict:
+    """The DDS transport's CPU per message (bench/dds_cost.py) and, for each graph run, what it
+    comes to over the run's messages and readers, beside the CPU its processes took."""
+    import dds_cost  # bench/dds_cost.py
+    cost = dds_cost.measure()
+    cpus = os.cpu_count() or 1
+    runs = [{**dds_cost.transport_bound(cost, g['topics'], g['sim_time_s'], cpus),
+             'graph_cpu_s': sum(c for c in g['cpu_s'].values() if c is not None)} for g in graphs]
+    return {**cost, 'runs': runs}
+
+
 def cpu_model() -> str:
     """The processor's model name and clock from /proc/cpuinfo (platform.processor() without it,
     '' when neither says): machines of one kind differ in speed, so a table's stamp says which one
@@ -267,6 +279,7 @@ def main() -> None:
               for name, pp in trees.items()}
         from graph_rtf import graph as graph_run  # bench/graph_rtf.py: run_graph.sh at a real-time factor
         graphs = [graph_run(0.0) for _ in range(a.graph_runs)]
+        dds = transport(graphs) if graphs else None
         memory = batch_memory() if a.publish else None
     print(f'\nengine per IMU step + 100 Hz master match (vm15, deck_paper, {a.seconds:g} s, best of {a.repeat}):')
     for name, e in eng.items():
@@ -291,6 +304,11 @@ def main() -> None:
               f'{"equal to" if g["same_estimate"] else "DIFFERENT FROM"} the batch pipeline\'s; '
               'CPU s per simulated minute: '
               + ', '.join(f'{n} {60.0 * c / g["sim_time_s"]:.1f}' for n, c in g['cpu_s'].items() if c is not None))
+    if dds:
+        print(f'DDS transport, CPU per Odometry message: publisher {dds["a_us"]:.1f} + {dds["b_us"]:.1f} us per '
+              f'reader, a raw subscriber {dds["c_us"]:.1f} us; in the graph runs ~'
+              + ', '.join(f'{b["transport_cpu_s"]:.1f}' for b in dds['runs']) + ' CPU s, the processes\' '
+              + ', '.join(f'{b["graph_cpu_s"]:.1f}' for b in dds['runs']))
     if memory:
         print(f'batch peak RSS, deck: {memory["peak_1h_mib"]:.0f} MiB for 1 h; ~ {memory["base_mib"]:.0f} MiB + '
               f'{memory["per_hour_mib"]:.0f} MiB per simulated hour')
@@ -301,7 +319,8 @@ def main() -> None:
                          'load_end': os.getloadavg()[0],
                          'command': f'scripts/bench.sh speed {args}',
                          'settings': {k: v for k, v in vars(a).items() if k in SETTINGS}},
-               'engine': eng['today'], 'kf': kf, 'pyins': peer or None, 'graphs': graphs, 'memory': memory,
+               'engine': eng['today'], 'kf': kf, 'pyins': peer or None, 'graphs': graphs, 'dds': dds,
+               'memory': memory,
                'mc': {sc: {str(w): mc[(sc, 'today', w)] for w in (1, 2)} for sc in a.mc_scenarios}}
         speed_table.RESULT.parent.mkdir(exist_ok=True)
         speed_table.RESULT.write_text(json.dumps(out, indent=1) + '\n')

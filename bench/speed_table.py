@@ -137,6 +137,19 @@ def render(r: dict[str, Any]) -> str:
                    for n in names}
         lines += ['', 'CPU seconds per simulated minute in the graph runs: '
                   + '; '.join(f'{n} {_list(v, lambda x: f"{x:.1f}")}' for n, v in per_min.items()) + '.']
+    dds = r.get('dds')
+    if dds and dds.get('runs'):
+        share = [b['transport_cpu_s'] / b['graph_cpu_s'] for b in dds['runs']]
+        lines += ['', f"The DDS transport alone, measured in the same run (bench/dds_cost.py: a publisher and "
+                  f"its subscribers, each a process, taking the messages serialized): {dds['a_us']:.0f} us of "
+                  f"CPU per message published plus {dds['b_us']:.0f} us per reader, and {dds['c_us']:.0f} us per "
+                  f"message a reader takes; over the graph runs' messages and readers that is "
+                  + _list([b['transport_cpu_s'] for b in dds['runs']], lambda x: f'{x:.1f}')
+                  + " CPU s against the processes' "
+                  + _list([b['graph_cpu_s'] for b in dds['runs']], lambda x: f'{x:.1f}') + ' ('
+                  + _list(share, lambda x: f'{100 * x:.0f} %') + '): the transport alone would allow '
+                  + _list([b['rtf_bound'] for b in dds['runs']], lambda x: f'{x:.0f}x')
+                  + ' real time on this machine.']
     peer = r.get('pyins')
     if peer and 'engine' in r:
         lines += ['', f"pyins' `run_feedback_filter` in the same run: {peer['pyins_us']:.0f} us per step, "

@@ -116,3 +116,15 @@ def test_the_stamp_names_the_processor_when_the_run_recorded_it(tmp_path):
     r['stamp']['cpu'] = 'AMD EPYC 2.6 GHz'
     speed_table.publish(r, (doc,))
     assert '2026-12-03, 2 CPUs (AMD EPYC 2.6 GHz), load average 0.5 at the start' in doc.read_text()
+
+
+def test_the_transport_line_gives_its_share_of_each_run():
+    dds = {'a_us': 30.0, 'b_us': 5.0, 'c_us': 20.0,
+           'runs': [{'transport_cpu_s': 4.0, 'graph_cpu_s': 20.0, 'rtf_bound': 34.0},
+                    {'transport_cpu_s': 5.0, 'graph_cpu_s': 25.0, 'rtf_bound': 27.2}]}
+    text = speed_table.render(run(dds=dds))
+    line = next(x for x in text.split('\n') if x.startswith('The DDS transport alone'))
+    assert '30 us of CPU per message published plus 5 us per reader, and 20 us' in line
+    assert "4.0, 5.0 CPU s against the processes' 20.0, 25.0 (20 %, 20 %)" in line
+    assert '34x, 27x real time' in line
+    assert 'The DDS transport' not in speed_table.render(run())

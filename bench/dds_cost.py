@@ -1,0 +1,206 @@
+"""The DDS transport's CPU per message, and the bound it alone sets on the graph's real-time factor.
+
+    scripts/bench.sh dds_cost [--messages 3000] [--readers 1 2 4] [--repeat 3] [--run RUN_DIR]
+
+One publisher and k subscribers, each a process of its own as the graph's nodes are, on a domain
+of their own, with the graph's QoS (RELIABLE, KEEP_ALL: alignment_ros/qos.py) and DDS profile
+(config/dds/fastdds.xml, through scripts/env.sh). The publisher sends nav_msgs/Odometry (the
+graph's commonest type) in bursts of BURST, as a fast run's nodes do; every subscriber takes the
+messages as serialized bytes, as the recorder does (a node's conversion into a Python message is
+not counted: the figures are a lower bound). Measured: each process's CPU time per message, less
+what it takes idle over the same time; the publisher's fitted as a + b k, a subscriber's c.
+
+With a graph run's directory (--run: its summary.json's message counts per topic) and the readers
+of each topic (alignment_ros.graph.MATCHED), it prints the CPU the transport alone takes in that
+run, the sum over topics of n (a + (b + c) k), and the real-time factor that would leave on this
+machine's CPUs if nothing else cost anything.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+TOPIC = '/dds_cost/odom'
+BURST = 100
+"""Messages sent back to back before a pause of PAUSE_S (a node at --real-time-factor 0 publishes
+whatever its inputs allow at once)."""
+PAUSE_S = 0.005
+IDLE_S = 1.0
+"""How long each process is measured idle, matched, before the messages (its baseline)."""
+TIMEOUT_S = 60.0
+
+
+def _qos():
+    from alignment_ros import qos
+    return qos.STREAM
+
+
+def _idle_cpu_rate(executor, seconds: float) -> float:
+    """CPU seconds per second of this process while it only spins (heartbeats, discovery)."""
+    c0, w0 = time.process_time(), time.monotonic()
+    while time.monotonic() - w0 < seconds:
+        executor.spin_once(timeout_sec=0.01)
+    return (time.process_time() - c0) / (time.monotonic() - w0)
+
+
+def publisher(messages: int, readers: int) -> dict:
+    """Publish `messages` Odometry messages once `readers` subscribers have matched; CPU per
+    message from the first publish until every subscriber has gone (its acknowledgements
+    included), less the idle rate over that time."""
+    import rclpy
+    from nav_msgs.msg import Odometry
+    from rclpy.experimental import EventsExecutor
+    rclpy.init()
+    node = rclpy.create_node('dds_cost_publisher')
+    pub = node.create_publisher(Odometry, TOPIC, _qos())
+    executor = EventsExecutor()
+    executor.add_node(node)
+    deadline = time.monotonic() + TIMEOUT_S
+    while pub.get_subscription_count() < readers:
+        if time.monotonic() > deadline:
+            raise RuntimeError(f'{pub.get_subscription_count()} of {readers} subscribers matched')
+        executor.spin_once(timeout_sec=0.05)
+    idle = _idle_cpu_rate(executor, IDLE_S)
+    msg = Odometry()
+    msg.header.frame_id, msg.child_frame_id = 'map', 'base_link'
+    c0, w0 = time.process_time(), time.monotonic()
+    for i in range(messages):
+        msg.header.stamp.sec = i
+        msg.pose.pose.position.x = float(i)
+        pub.publish(msg)
+        if i % BURST == BURST - 1:
+            time.sleep(PAUSE_S)
+    while pub.get_subscription_count() > 0 and time.monotonic() < deadline + TIMEOUT_S:
+        executor.spin_once(timeout_sec=0.01)
+    wall = time.monotonic() - w0
+    cpu = time.process_time() - c0 - idle * wall
+    node.destroy_node()
+    rclpy.shutdown()
+    return {'role': 'pub', 'readers': readers, 'us_per_msg': 1e6 * cpu / messages, 'idle_cpu_per_s': idle}
+
+
+def subscriber(messages: int) -> dict:
+    """Take `messages` messages as bytes; CPU per message from the first to the last, less the
+    idle rate over that time."""
+    import rclpy
+    from nav_msgs.msg import Odometry
+    from rclpy.experimental import EventsExecutor
+    rclpy.init()
+    node = rclpy.create_node('dds_cost_subscriber')
+    got = [0]
+
+    def on_message(_: bytes) -> None:
+        got[0] += 1
+    node.create_subscription(Odometry, TOPIC, on_message, _qos(), raw=True)
+    executor = EventsExecutor()
+    executor.add_node(node)
+    deadline = time.monotonic() + TIMEOUT_S
+    while node.count_publishers(TOPIC) < 1 and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
+    idle = _idle_cpu_rate(executor, IDLE_S)
+    while got[0] < 1 and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.01)
+    c0, w0 = time.process_time(), time.monotonic()
+    while got[0] < messages and time.monotonic() < deadline + TIMEOUT_S:
+        executor.spin_once(timeout_sec=0.01)
+    wall = time.monotonic() - w0
+    cpu = time.process_time() - c0 - idle * wall
+    taken = got[0]
+    node.destroy_node()
+    rclpy.shutdown()
+    return {'role': 'sub', 'taken': taken, 'us_per_msg': 1e6 * cpu / max(taken - 1, 1), 'idle_cpu_per_s': idle}
+
+
+def one_setting(messages: int, readers: int) -> tuple[float, list[float]]:
+    """(publisher us per message, each subscriber's) with `readers` subscribers, on a free domain."""
+    from alignment_ros import domain
+    dom = domain.claim()
+    try:
+        env = {**os.environ, 'ROS_DOMAIN_ID': str(dom)}
+        cmd = [sys.executable, __file__, '--messages', str(messages)]
+        subs = [subprocess.Popen([*cmd, '--role', 'sub'], env=env, stdout=subprocess.PIPE, text=True)
+                for _ in range(readers)]
+        pub = subprocess.run([*cmd, '--role', 'pub', '--readers', str(readers)], env=env, capture_output=True,
+                             text=True, timeout=4 * TIMEOUT_S)
+        outs = [s.communicate(timeout=4 * TIMEOUT_S)[0] for s in subs]
+    finally:
+        domain.release(dom)
+    if pub.returncode != 0:
+        raise RuntimeError(pub.stderr)
+    got = [json.loads(o.strip().splitlines()[-1]) for o in outs]
+    short = [g['taken'] for g in got if g['taken'] != messages]
+    if short:
+        raise RuntimeError(f'subscribers took {short} of {messages} messages')
+    return json.loads(pub.stdout.strip().splitlines()[-1])['us_per_msg'], [g['us_per_msg'] for g in got]
+
+
+def measure(messages: int = 3000, readers: tuple[int, ...] = (1, 2, 4), repeat: int = 3) -> dict:
+    """a, b (publisher: a + b k us per message with k readers) and c (a subscriber's us per
+    message), each from the medians over `repeat` runs of every k."""
+    pub_us, sub_us = [], []
+    for k in readers:
+        runs = [one_setting(messages, k) for _ in range(repeat)]
+        pub_us.append(float(np.median([p for p, _ in runs])))
+        sub_us.extend(s for _, ss in runs for s in ss)
+    b, a = np.polyfit(np.array(readers, dtype=float), np.array(pub_us), 1)
+    return {'a_us': float(a), 'b_us': float(b), 'c_us': float(np.median(sub_us)), 'readers': list(readers),
+            'pub_us': pub_us, 'messages': messages, 'repeat': repeat}
+
+
+def readers_per_topic() -> dict[str, int]:
+    """How many nodes (the recorder included) read each topic of the default graph."""
+    from alignment_ros.graph import MATCHED
+    return {topic: len(names) for sent in MATCHED.values() for topic, names in sent.items()}
+
+
+def transport_bound(cost: dict, topics: dict[str, int], sim_time_s: float, cpus: int,
+                    readers: dict[str, int] | None = None) -> dict:
+    """The transport's CPU seconds in a run with `topics` message counts (a topic missing from
+    `readers`, default the graph's, has one reader: the recorder), and the real-time factor it
+    alone would allow on `cpus` CPUs (the streaming part: start-up not counted)."""
+    readers = readers_per_topic() if readers is None else readers
+    cpu_us = sum(n * (cost['a_us'] + (cost['b_us'] + cost['c_us']) * readers.get(t, 1)) for t, n in topics.items())
+    reads = sum(n * readers.get(t, 1) for t, n in topics.items())
+    cpu_s = cpu_us * 1e-6
+    return {'transport_cpu_s': cpu_s, 'messages': sum(topics.values()), 'reads': reads,
+            'rtf_bound': sim_time_s / (cpu_s / cpus)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    ap.add_argument('--messages', type=int, default=3000)
+    ap.add_argument('--readers', type=int, nargs='+', default=[1, 2, 4])
+    ap.add_argument('--repeat', type=int, default=3)
+    ap.add_argument('--run', type=Path, help="a graph run's output directory (its summary.json)")
+    ap.add_argument('--role', choices=('pub', 'sub'), help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.role == 'pub':
+        print(json.dumps(publisher(a.messages, a.readers[0])))
+        return
+    if a.role == 'sub':
+        print(json.dumps(subscriber(a.messages)))
+        return
+    cost = measure(a.messages, tuple(a.readers), a.repeat)
+    print(f'{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; {a.messages} Odometry messages, '
+          f'median of {a.repeat} runs per reader count')
+    for k, p in zip(cost['readers'], cost['pub_us']):
+        print(f'  publisher with {k} reader(s): {p:6.1f} us CPU per message')
+    print(f'  fit: publisher {cost["a_us"]:.1f} + {cost["b_us"]:.1f} us per reader; a subscriber {cost["c_us"]:.1f} us')
+    if a.run is not None:
+        s = json.loads((a.run / 'summary.json').read_text())
+        cpus = os.cpu_count() or 1
+        bound = transport_bound(cost, s['topics'], s['sim_time_s'], cpus)
+        print(f'run {a.run}: {bound["messages"]} messages, {bound["reads"]} reads; the transport alone '
+              f'~{bound["transport_cpu_s"]:.1f} CPU s for {s["sim_time_s"]:g} simulated s, so at most '
+              f'{bound["rtf_bound"]:.1f}x real time on {cpus} CPUs if nothing else cost anything')
+
+
+if __name__ == '__main__':
+    main()
