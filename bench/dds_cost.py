@@ -10,6 +10,9 @@ messages as serialized bytes, as the recorder does (a node's conversion into a P
 not counted: the figures are a lower bound). Measured: each process's CPU time per message, less
 what it takes idle over the same time; the publisher's fitted as a + b k, a subscriber's c.
 
+It also times the reading of each stream type from its bytes: rclpy's conversion into its Python
+message against rosbags' reader (alignment_ros/wire.py), which the nodes use.
+
 With a graph run's directory (--run: its summary.json's message counts per topic) and the readers
 of each topic (alignment_ros.graph.MATCHED), it prints the CPU the transport alone takes in that
 run, the sum over topics of n (a + (b + c) k), and the real-time factor that would leave on this
@@ -151,7 +154,34 @@ def measure(messages: int = 3000, readers: tuple[int, ...] = (1, 2, 4), repeat: 
         sub_us.extend(s for _, ss in runs for s in ss)
     b, a = np.polyfit(np.array(readers, dtype=float), np.array(pub_us), 1)
     return {'a_us': float(a), 'b_us': float(b), 'c_us': float(np.median(sub_us)), 'readers': list(readers),
-            'pub_us': pub_us, 'messages': messages, 'repeat': repeat}
+            'pub_us': pub_us, 'messages': messages, 'repeat': repeat, 'read_us': read_costs()}
+
+
+def read_costs(repeat: int = 2000) -> dict[str, dict[str, float]]:
+    """{type: {'rclpy_us', 'wire_us'}}: reading one message of each stream type from its bytes,
+    rclpy's deserialize_message (what a typed subscription does) against alignment_ros.wire's
+    reader; the best of five rounds of `repeat`."""
+    from geometry_msgs.msg import AccelStamped, TwistWithCovarianceStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.serialization import deserialize_message, serialize_message
+    from sensor_msgs.msg import FluidPressure, Imu
+
+    from alignment_ros import wire
+    out = {}
+    for cls in (Odometry, Imu, AccelStamped, TwistWithCovarianceStamped, FluidPressure):
+        msg = cls()
+        msg.header.frame_id = 'aircraft'
+        raw = serialize_message(msg)
+        read = wire.reader(cls)
+        best = {'rclpy_us': float('inf'), 'wire_us': float('inf')}
+        for _ in range(5):
+            for key, fn, args in (('rclpy_us', deserialize_message, (raw, cls)), ('wire_us', read, (raw,))):
+                t = time.perf_counter()
+                for _ in range(repeat):
+                    fn(*args)
+                best[key] = min(best[key], 1e6 * (time.perf_counter() - t) / repeat)
+        out[wire.type_name(cls)] = best
+    return out
 
 
 def readers_per_topic() -> dict[str, int]:
@@ -193,6 +223,9 @@ def main() -> None:
     for k, p in zip(cost['readers'], cost['pub_us']):
         print(f'  publisher with {k} reader(s): {p:6.1f} us CPU per message')
     print(f'  fit: publisher {cost["a_us"]:.1f} + {cost["b_us"]:.1f} us per reader; a subscriber {cost["c_us"]:.1f} us')
+    print('reading a message from its bytes (rclpy against alignment_ros.wire):')
+    for name, r in cost['read_us'].items():
+        print(f'  {name:45s} {r["rclpy_us"]:6.1f} us  {r["wire_us"]:6.1f} us  ({r["rclpy_us"] / r["wire_us"]:.1f}x)')
     if a.run is not None:
         s = json.loads((a.run / 'summary.json').read_text())
         cpus = os.cpu_count() or 1

@@ -150,6 +150,10 @@ def render(r: dict[str, Any]) -> str:
                   + _list(share, lambda x: f'{100 * x:.0f} %') + '): the transport alone would allow '
                   + _list([b['rtf_bound'] for b in dds['runs']], lambda x: f'{x:.0f}x')
                   + ' real time on this machine.']
+        odom = dds.get('read_us', {}).get('nav_msgs/msg/Odometry')
+        if odom:
+            lines[-1] += (f" Reading an Odometry from its bytes took {odom['rclpy_us']:.0f} us through rclpy's "
+                          f"conversion and {odom['wire_us']:.0f} us through the nodes' reader (alignment_ros/wire.py).")
     peer = r.get('pyins')
     if peer and 'engine' in r:
         lines += ['', f"pyins' `run_feedback_filter` in the same run: {peer['pyins_us']:.0f} us per step, "

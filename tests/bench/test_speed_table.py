@@ -127,4 +127,9 @@ def test_the_transport_line_gives_its_share_of_each_run():
     assert '30 us of CPU per message published plus 5 us per reader, and 20 us' in line
     assert "4.0, 5.0 CPU s against the processes' 20.0, 25.0 (20 %, 20 %)" in line
     assert '34x, 27x real time' in line
+    assert 'Reading an Odometry' not in line
+    dds['read_us'] = {'nav_msgs/msg/Odometry': {'rclpy_us': 40.2, 'wire_us': 8.4}}
+    line = next(x for x in speed_table.render(run(dds=dds)).split('\n') if x.startswith('The DDS transport alone'))
+    assert line.endswith("Reading an Odometry from its bytes took 40 us through rclpy's conversion and 8 us "
+                         "through the nodes' reader (alignment_ros/wire.py).")
     assert 'The DDS transport' not in speed_table.render(run())

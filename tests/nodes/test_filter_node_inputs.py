@@ -44,6 +44,23 @@ def test_expected_frames_pass_and_others_are_rejected(inp):
     assert level == WARN and flags == ('frame_id',)
 
 
+def test_malformed_messages_are_reported_with_the_frame_rejections(inp):
+    """The subscriptions' malformed messages (alignment_ros/wire.py) never reach the engine; the
+    node says how many came, as WARN 'malformed', beside a wrong frame's rejections."""
+    f = _inputs()
+    assert f.imu(convert.imu_to_msg(inp.imu[0], 0.0, 0.0)) == ''
+    f.malformed(topics.MASTER_ODOM)
+    f.malformed(topics.LDV_TWIST)
+    assert f.rejected_malformed == 2 and f.engine.counters.master == f.engine.counters.ldv == 0
+    assert f.status() == (WARN, ('malformed',))
+    imu = convert.imu_to_msg(inp.imu[1], 0.0, 0.0)
+    imu.header.frame_id = 'ship'
+    assert f.imu(imu) == 'frame_id'
+    assert f.status() == (WARN, ('frame_id', 'malformed'))
+    text = f.message(f.engine.report())
+    assert text.endswith('; 1 messages in a wrong frame rejected; 2 malformed messages rejected')
+
+
 def test_an_engine_rejection_comes_back_with_its_reason(inp):
     f = _inputs()
     m = convert.master_to_msg(inp.master[0])

@@ -28,7 +28,7 @@ from alignment_core.air_data_run import IMU_BLOCK_S, make_estimator
 from alignment_core.estimation.air_data.outputs import AirDataEstimate
 from alignment_core.estimation.air_data.paper_form import PaperAirDataFilter
 from alignment_core.validation import require
-from alignment_ros import air_data_convert, convert, node_util, qos, topics
+from alignment_ros import air_data_convert, convert, node_util, topics
 from alignment_ros.air_data_topics import INS_TOPICS
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
@@ -66,10 +66,10 @@ class AirDataFilterNode(node_util.CountingNode):
         self.stream_publisher(Float64MultiArray, topics.AIR_DATA_STATE)
         self.stream_publisher(DiagnosticArray, topics.DIAGNOSTICS)
         for k, t in enumerate(topics.FADS_PORT_TOPICS):
-            self.create_subscription(FluidPressure, t, functools.partial(self.on_port, k), qos.STREAM)
-        self.create_subscription(Odometry, self.ins_topic, self.on_ins, qos.STREAM)
+            self.stream_subscription(FluidPressure, t, functools.partial(self.on_port, k))
+        self.stream_subscription(Odometry, self.ins_topic, self.on_ins)
         if self.paper:
-            self.create_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu, qos.STREAM)
+            self.stream_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu)
 
     # ----- inputs -----
     def on_port(self, k: int, m: FluidPressure) -> None:

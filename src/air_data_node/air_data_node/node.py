@@ -14,7 +14,7 @@ from alignment_core import pipeline
 from alignment_core.geometry.rotations import quat_to_dcm
 from alignment_core.sensors.fads import FadsStage
 from alignment_core.validation import require
-from alignment_ros import air_data_convert, convert, node_util, qos, topics
+from alignment_ros import air_data_convert, convert, node_util, topics
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
 
@@ -35,7 +35,7 @@ class AirDataNode(node_util.CountingNode):
             self.stream_publisher(FluidPressure, t)
         self.stream_publisher(Float64MultiArray, topics.TRUTH_AIR_DATA_STATE)
         self.stream_publisher(Vector3Stamped, topics.TRUTH_WIND)
-        self.create_subscription(Odometry, topics.TRUTH_AIRCRAFT_ODOM, self.on_truth, qos.STREAM)
+        self.stream_subscription(Odometry, topics.TRUTH_AIRCRAFT_ODOM, self.on_truth)
 
     def on_truth(self, m: Odometry) -> None:
         self.received[topics.TRUTH_AIRCRAFT_ODOM] += 1

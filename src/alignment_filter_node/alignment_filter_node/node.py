@@ -1,7 +1,8 @@
 """alignment_filter_node: aligns the aircraft INS to the master INS (never reads truth).
 
-Inputs are checked for their frame (a message in another frame is rejected and counted as
-'frame_id'), converted, and queued and processed in stamp order by alignment_core's
+Inputs are read from their bytes (a message that is not one of its type is rejected and counted
+as 'malformed': alignment_ros/wire.py), checked for their frame (a message in another frame is
+rejected and counted as 'frame_id'), converted, and queued and processed in stamp order by alignment_core's
 TransferAlignment, which rejects implausible samples itself (counted per reason), so its outputs
 do not depend on how the streams interleave on arrival. What it publishes is the engine's
 published view: never a non-finite or absurd estimate, and from an ERROR on (a numerical
@@ -26,7 +27,7 @@ from alignment_core import pipeline
 from alignment_core.estimation.engine import TransferAlignment
 from alignment_core.estimation.health import ERROR, WARN
 from alignment_core.estimation.outputs import Diagnostics, Estimate, Report
-from alignment_ros import convert, node_util, qos, topics
+from alignment_ros import convert, node_util, topics
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
 LEVELS = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR)
@@ -34,7 +35,8 @@ LEVELS = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR)
 
 class FilterInputs:
     """Messages into the engine: the frame check, the conversion, the push. Each call returns ''
-    if the message was taken, else the reason it was rejected ('frame_id' or the engine's).
+    if the message was taken, else the reason it was rejected ('frame_id' or the engine's); the
+    subscriptions count the messages they could not read (`malformed`).
     wall_silence_s > 0: a stream the engine waits for is only reported while it has also
     delivered nothing for that long on `clock` (a stall, not a scheduling hiccup of a fast run)."""
 
@@ -42,6 +44,7 @@ class FilterInputs:
                  clock: Callable[[], float] = time.monotonic) -> None:
         self.engine = engine
         self.rejected_frame_id = 0
+        self.rejected_malformed = 0
         self._wall_silence_s = wall_silence_s
         self._clock = clock
         self._delivered: dict[str, float] = {}          # stream -> clock time of its last sample taken
@@ -60,6 +63,19 @@ class FilterInputs:
     def doppler(self, m: TwistWithCovarianceStamped) -> str:
         return self._take(topics.DOPPLER_TWIST, m) or self._pushed(
             self.engine.push_doppler(convert.msg_to_doppler(m)), 'doppler')
+
+    def malformed(self, topic: str) -> None:
+        """A message on `topic` that was not one of its type (never reached the engine)."""
+        self.rejected_malformed += 1
+
+    def _rejections(self) -> list[tuple[str, str]]:
+        """(flag, text) of the node's own rejections so far: messages in a wrong frame, malformed ones."""
+        out = []
+        if self.rejected_frame_id:
+            out.append(('frame_id', f'{self.rejected_frame_id} messages in a wrong frame rejected'))
+        if self.rejected_malformed:
+            out.append(('malformed', f'{self.rejected_malformed} malformed messages rejected'))
+        return out
 
     def _take(self, topic: str, m) -> str:
         if convert.frame_mismatch(m, *topics.INPUT_FRAMES[topic]):
@@ -85,23 +101,22 @@ class FilterInputs:
         """The (level, flags) of the engine's report (the given one, an output's, or as of the
         stamps processed so far); WARN and 'waiting_<stream>' while the stamp order waits for a
         master or LDV that delivers nothing (arrival liveness); WARN and 'frame_id' once a message
-        in a wrong frame came."""
+        in a wrong frame came, 'malformed' once one that was not a message of its type came."""
         level, flags = (report.level, report.flags) if report is not None else self.engine.status()
         waiting = self.waiting_for()
         if waiting:
             level, flags = max(level, WARN), (*flags, *(f'waiting_{k}' for k in waiting))
-        if self.rejected_frame_id:
-            return max(level, WARN), (*flags, 'frame_id')
-        return level, flags
+        own = [flag for flag, _ in self._rejections()]
+        return (max(level, WARN), (*flags, *own)) if own else (level, flags)
 
     def message(self, report: Report | Diagnostics) -> str:
-        """The report's message, with what the node waits for and the wrong-frame rejections."""
+        """The report's message, with what the node waits for and its own rejections."""
         text = report.message
         waiting = self.waiting_for()
         if waiting:
             text += f"; waiting for {', '.join(waiting)}"
-        if self.rejected_frame_id:
-            text += f'; {self.rejected_frame_id} messages in a wrong frame rejected'
+        for _, why in self._rejections():
+            text += f'; {why}'
         return text
 
 
@@ -117,14 +132,18 @@ class AlignmentFilterNode(node_util.CountingNode):
         self.stream_publisher(Float64MultiArray, topics.ALIGN_STATE)
         self.stream_publisher(Odometry, topics.ALIGN_ODOM)
         self.stream_publisher(DiagnosticArray, topics.DIAGNOSTICS)
-        self.create_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu, qos.STREAM)
-        self.create_subscription(Odometry, topics.MASTER_ODOM, self.on_master, qos.STREAM)
-        self.create_subscription(TwistWithCovarianceStamped, topics.LDV_TWIST, self.on_ldv, qos.STREAM)
+        self.stream_subscription(Imu, topics.AIRCRAFT_IMU, self.on_imu, self.on_malformed)
+        self.stream_subscription(Odometry, topics.MASTER_ODOM, self.on_master, self.on_malformed)
+        self.stream_subscription(TwistWithCovarianceStamped, topics.LDV_TWIST, self.on_ldv, self.on_malformed)
         if self.engine.uses_doppler:
-            self.create_subscription(TwistWithCovarianceStamped, topics.DOPPLER_TWIST, self.on_doppler, qos.STREAM)
+            self.stream_subscription(TwistWithCovarianceStamped, topics.DOPPLER_TWIST, self.on_doppler,
+                                     self.on_malformed)
         self.n_out = 0
         self.reported: tuple[int, tuple[str, ...]] = (0, ())    # (level, flags) last published in /diagnostics
         self.last: Estimate | None = None
+
+    def on_malformed(self, topic: str) -> None:
+        self.inputs.malformed(topic)
 
     def on_imu(self, m: Imu) -> None:
         self._accept(topics.AIRCRAFT_IMU, self.inputs.imu(m), m)
@@ -200,7 +219,7 @@ class AlignmentFilterNode(node_util.CountingNode):
             'rejected_nonfinite': c.rejected_nonfinite, 'rejected_out_of_order': c.rejected_out_of_order,
             'rejected_quaternion': c.rejected_quaternion, 'rejected_range': c.rejected_range,
             'rejected_future_stamp': c.rejected_future_stamp, 'rejected_frame_id': self.inputs.rejected_frame_id,
-            'rejected_ldv_mode': c.rejected_ldv_mode,
+            'rejected_malformed': self.inputs.rejected_malformed, 'rejected_ldv_mode': c.rejected_ldv_mode,
             'quaternion_normalised': c.quaternion_normalised, 'launch_not_felt': c.launch_not_felt,
             'imu_gaps': c.imu_gaps, 'bridged_gaps': c.bridged_gaps, 'gate_released': c.gate_released,
             'imu': c.imu, 'master': c.master, 'ldv': c.ldv, 'doppler': c.doppler,
@@ -225,7 +244,8 @@ class AlignmentFilterNode(node_util.CountingNode):
 
     def stats(self) -> dict:
         d = super().stats()
-        d['filter'] = {**dataclasses.asdict(self.engine.counters), 'rejected_frame_id': self.inputs.rejected_frame_id}
+        d['filter'] = {**dataclasses.asdict(self.engine.counters), 'rejected_frame_id': self.inputs.rejected_frame_id,
+                       'rejected_malformed': self.inputs.rejected_malformed}
         return d
 
 

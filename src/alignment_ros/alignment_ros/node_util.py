@@ -8,7 +8,9 @@ import json
 import sys
 import time
 from collections import Counter, defaultdict
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
@@ -22,7 +24,7 @@ from rclpy.publisher import Publisher
 
 from alignment_core.validation import ConfigError
 
-from . import params, qos
+from . import params, qos, wire
 from .dds_teardown import shut_down
 from .heap import map_large_allocations, release_free_heap
 from .signals import stop_on_signals
@@ -99,6 +101,28 @@ class CountingNode(Node):
         pub = self.create_publisher(msg_type, topic, qos.STREAM)
         self._pubs[topic] = pub
         return pub
+
+    def stream_subscription(self, msg_type, topic: str, callback: Callable[[Any], None],
+                            on_malformed: Callable[[str], None] | None = None):
+        """Subscribe to a stream (qos.STREAM) as bytes and hand `callback` the message read from
+        them (alignment_ros/wire.py: rosbags' dataclass of msg_type, the same fields). Bytes that are
+        not such a message are rejected: counted under 'malformed <topic>' in `rejected`, logged,
+        passed to `on_malformed` (with the topic) if given, and the node goes on."""
+        read = wire.reader(msg_type)
+        key = f'malformed {topic}'
+
+        def on_bytes(raw: bytes) -> None:
+            try:
+                msg = read(raw)
+            except wire.MalformedMessageError as e:
+                self.rejected[key] += 1
+                self.get_logger().error(f'{topic}: rejected a malformed message ({e}); '
+                                        f'{self.rejected[key]} so far', throttle_duration_sec=1.0)
+                if on_malformed is not None:
+                    on_malformed(topic)
+                return
+            callback(msg)
+        return self.create_subscription(msg_type, topic, on_bytes, qos.STREAM, raw=True)
 
     def _matched(self, topic: str) -> bool:
         """The topic's publisher has the subscriptions it waits for (see readers_matched)."""

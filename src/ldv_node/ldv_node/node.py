@@ -18,7 +18,7 @@ from alignment_core import pipeline
 from alignment_core.samples import AircraftTruth, ShipSample
 from alignment_core.sensors.doppler_radar import DopplerStage
 from alignment_core.sensors.ldv import LdvStage
-from alignment_ros import convert, node_util, qos, topics
+from alignment_ros import convert, node_util, topics
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 from alignment_ros.stamped_pairs import StampPairer
 
@@ -38,8 +38,8 @@ class LdvNode(node_util.CountingNode):
         self.pairs = StampPairer()
         self.pending: list[tuple[ShipSample, AircraftTruth]] = []
         self.create_timer(FLUSH_PERIOD_S, self.flush, clock=Clock(clock_type=ClockType.STEADY_TIME))
-        self.create_subscription(Odometry, topics.SHIP_ODOM, self.on_ship, qos.STREAM)
-        self.create_subscription(Odometry, topics.TRUTH_AIRCRAFT_ODOM, self.on_aircraft, qos.STREAM)
+        self.stream_subscription(Odometry, topics.SHIP_ODOM, self.on_ship)
+        self.stream_subscription(Odometry, topics.TRUTH_AIRCRAFT_ODOM, self.on_aircraft)
 
     def on_ship(self, m: Odometry) -> None:
         self.received[topics.SHIP_ODOM] += 1

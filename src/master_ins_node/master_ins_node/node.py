@@ -11,7 +11,7 @@ from sensor_msgs.msg import NavSatFix
 from alignment_core import pipeline
 from alignment_core.sensors.master_ins import MasterInsStage
 from alignment_core.units import DEG
-from alignment_ros import convert, node_util, qos, topics
+from alignment_ros import convert, node_util, topics
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 
 FIX_RATE_HZ = 10.0
@@ -30,7 +30,7 @@ class MasterInsNode(node_util.CountingNode):
         self.fix_every = max(1, round((m.rate_hz or self.sc.rate_hz) / FIX_RATE_HZ))
         self.n_out = 0
         self.last_t: int | None = None
-        self.create_subscription(Odometry, topics.SHIP_ODOM, self.on_ship, qos.STREAM)
+        self.stream_subscription(Odometry, topics.SHIP_ODOM, self.on_ship)
 
     def on_ship(self, odom: Odometry) -> None:
         self.received[topics.SHIP_ODOM] += 1

@@ -19,7 +19,7 @@ from alignment_core import pipeline
 from alignment_core.geometry.rotations import quat_to_dcm
 from alignment_core.samples import AircraftTruth, ShipSample
 from alignment_core.sensors.reference_ins import ReferenceInsStage
-from alignment_ros import air_data_convert, convert, node_util, qos, topics
+from alignment_ros import air_data_convert, convert, node_util, topics
 from alignment_ros.air_data_topics import REFERENCE_INS_ODOM
 from alignment_ros.params import NODE_SCOPES, ScenarioParameters
 from alignment_ros.stamped_pairs import StampPairer
@@ -50,8 +50,8 @@ class SlaveInsNode(node_util.CountingNode):
         self.pairs = StampPairer()
         self.pending: list[ShipSample] = []
         self.create_timer(FLUSH_PERIOD_S, self.flush, clock=Clock(clock_type=ClockType.STEADY_TIME))
-        self.create_subscription(Odometry, topics.SHIP_ODOM, self.on_odom, qos.STREAM)
-        self.create_subscription(AccelStamped, topics.SHIP_ACCEL, self.on_accel, qos.STREAM)
+        self.stream_subscription(Odometry, topics.SHIP_ODOM, self.on_odom)
+        self.stream_subscription(AccelStamped, topics.SHIP_ACCEL, self.on_accel)
 
     def on_odom(self, m: Odometry) -> None:
         self.received[topics.SHIP_ODOM] += 1
