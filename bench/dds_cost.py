@@ -6,9 +6,11 @@ One publisher and k subscribers, each a process of its own as the graph's nodes 
 of their own, with the graph's QoS (RELIABLE, KEEP_ALL: alignment_ros/qos.py) and DDS profile
 (config/dds/fastdds.xml, through scripts/env.sh). The publisher sends nav_msgs/Odometry (the
 graph's commonest type) in bursts of BURST, as a fast run's nodes do; every subscriber takes the
-messages as serialized bytes, as the recorder does (a node's conversion into a Python message is
-not counted: the figures are a lower bound). Measured: each process's CPU time per message, less
-what it takes idle over the same time; the publisher's fitted as a + b k, a subscriber's c.
+messages as serialized bytes, as the recorder does; the publisher sends them serialized beforehand
+(rclpy's conversion of a Python message, either way, is the nodes' cost, not the transport's).
+Measured: each process's CPU time per message, the publisher's from its first message until every
+reader acknowledged the last, a subscriber's from its first message to its last; the publisher's
+fitted as a + b k (the median of the repeats for each k; their range is kept), a subscriber's c.
 
 It also times the reading of each stream type from its bytes: rclpy's conversion into its Python
 message against rosbags' reader (alignment_ros/wire.py), which the nodes use.
@@ -35,8 +37,8 @@ BURST = 100
 """Messages sent back to back before a pause of PAUSE_S (a node at --real-time-factor 0 publishes
 whatever its inputs allow at once)."""
 PAUSE_S = 0.005
-IDLE_S = 1.0
-"""How long each process is measured idle, matched, before the messages (its baseline)."""
+SETTLE_S = 0.5
+"""After the readers matched, before the first message."""
 TIMEOUT_S = 60.0
 
 
@@ -45,21 +47,15 @@ def _qos():
     return qos.STREAM
 
 
-def _idle_cpu_rate(executor, seconds: float) -> float:
-    """CPU seconds per second of this process while it only spins (heartbeats, discovery)."""
-    c0, w0 = time.process_time(), time.monotonic()
-    while time.monotonic() - w0 < seconds:
-        executor.spin_once(timeout_sec=0.01)
-    return (time.process_time() - c0) / (time.monotonic() - w0)
-
-
 def publisher(messages: int, readers: int) -> dict:
-    """Publish `messages` Odometry messages once `readers` subscribers have matched; CPU per
-    message from the first publish until every subscriber has gone (its acknowledgements
-    included), less the idle rate over that time."""
+    """Publish `messages` Odometry messages, serialized beforehand (rclpy's conversion of a Python
+    message is the node's cost, not the transport's), once `readers` subscribers have matched; CPU
+    per message from the first publish until every reader has acknowledged the last."""
     import rclpy
     from nav_msgs.msg import Odometry
+    from rclpy.duration import Duration
     from rclpy.experimental import EventsExecutor
+    from rclpy.serialization import serialize_message
     rclpy.init()
     node = rclpy.create_node('dds_cost_publisher')
     pub = node.create_publisher(Odometry, TOPIC, _qos())
@@ -70,28 +66,30 @@ def publisher(messages: int, readers: int) -> dict:
         if time.monotonic() > deadline:
             raise RuntimeError(f'{pub.get_subscription_count()} of {readers} subscribers matched')
         executor.spin_once(timeout_sec=0.05)
-    idle = _idle_cpu_rate(executor, IDLE_S)
+    time.sleep(SETTLE_S)                   # the readers' side of the match, before the first message
     msg = Odometry()
     msg.header.frame_id, msg.child_frame_id = 'map', 'base_link'
-    c0, w0 = time.process_time(), time.monotonic()
+    payloads = []
     for i in range(messages):
         msg.header.stamp.sec = i
         msg.pose.pose.position.x = float(i)
-        pub.publish(msg)
+        payloads.append(serialize_message(msg))
+    c0 = time.process_time()
+    for i, raw in enumerate(payloads):
+        pub.publish(raw)
         if i % BURST == BURST - 1:
             time.sleep(PAUSE_S)
-    while pub.get_subscription_count() > 0 and time.monotonic() < deadline + TIMEOUT_S:
-        executor.spin_once(timeout_sec=0.01)
-    wall = time.monotonic() - w0
-    cpu = time.process_time() - c0 - idle * wall
+    acked = pub.wait_for_all_acked(Duration(seconds=TIMEOUT_S))
+    cpu = time.process_time() - c0
     node.destroy_node()
     rclpy.shutdown()
-    return {'role': 'pub', 'readers': readers, 'us_per_msg': 1e6 * cpu / messages, 'idle_cpu_per_s': idle}
+    if not acked:
+        raise RuntimeError(f'the readers did not acknowledge every message within {TIMEOUT_S:g} s')
+    return {'role': 'pub', 'readers': readers, 'us_per_msg': 1e6 * cpu / messages}
 
 
 def subscriber(messages: int) -> dict:
-    """Take `messages` messages as bytes; CPU per message from the first to the last, less the
-    idle rate over that time."""
+    """Take `messages` messages as bytes; CPU per message from the first to the last."""
     import rclpy
     from nav_msgs.msg import Odometry
     from rclpy.experimental import EventsExecutor
@@ -105,20 +103,16 @@ def subscriber(messages: int) -> dict:
     executor = EventsExecutor()
     executor.add_node(node)
     deadline = time.monotonic() + TIMEOUT_S
-    while node.count_publishers(TOPIC) < 1 and time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.05)
-    idle = _idle_cpu_rate(executor, IDLE_S)
     while got[0] < 1 and time.monotonic() < deadline:
         executor.spin_once(timeout_sec=0.01)
-    c0, w0 = time.process_time(), time.monotonic()
+    c0 = time.process_time()
     while got[0] < messages and time.monotonic() < deadline + TIMEOUT_S:
         executor.spin_once(timeout_sec=0.01)
-    wall = time.monotonic() - w0
-    cpu = time.process_time() - c0 - idle * wall
+    cpu = time.process_time() - c0
     taken = got[0]
     node.destroy_node()
     rclpy.shutdown()
-    return {'role': 'sub', 'taken': taken, 'us_per_msg': 1e6 * cpu / max(taken - 1, 1), 'idle_cpu_per_s': idle}
+    return {'role': 'sub', 'taken': taken, 'us_per_msg': 1e6 * cpu / max(taken - 1, 1)}
 
 
 def one_setting(messages: int, readers: int) -> tuple[float, list[float]]:
@@ -130,9 +124,15 @@ def one_setting(messages: int, readers: int) -> tuple[float, list[float]]:
         cmd = [sys.executable, __file__, '--messages', str(messages)]
         subs = [subprocess.Popen([*cmd, '--role', 'sub'], env=env, stdout=subprocess.PIPE, text=True)
                 for _ in range(readers)]
-        pub = subprocess.run([*cmd, '--role', 'pub', '--readers', str(readers)], env=env, capture_output=True,
-                             text=True, timeout=4 * TIMEOUT_S)
-        outs = [s.communicate(timeout=4 * TIMEOUT_S)[0] for s in subs]
+        try:
+            pub = subprocess.run([*cmd, '--role', 'pub', '--readers', str(readers)], env=env, capture_output=True,
+                                 text=True, timeout=4 * TIMEOUT_S)
+            outs = [s.communicate(timeout=4 * TIMEOUT_S)[0] for s in subs]
+        finally:
+            for sub in subs:
+                if sub.poll() is None:
+                    sub.kill()
+                    sub.wait()
     finally:
         domain.release(dom)
     if pub.returncode != 0:
@@ -147,14 +147,16 @@ def one_setting(messages: int, readers: int) -> tuple[float, list[float]]:
 def measure(messages: int = 3000, readers: tuple[int, ...] = (1, 2, 4), repeat: int = 3) -> dict:
     """a, b (publisher: a + b k us per message with k readers) and c (a subscriber's us per
     message), each from the medians over `repeat` runs of every k."""
-    pub_us, sub_us = [], []
+    pub_us, pub_range, sub_us = [], [], []
     for k in readers:
         runs = [one_setting(messages, k) for _ in range(repeat)]
         pub_us.append(float(np.median([p for p, _ in runs])))
+        pub_range.append((min(p for p, _ in runs), max(p for p, _ in runs)))
         sub_us.extend(s for _, ss in runs for s in ss)
     b, a = np.polyfit(np.array(readers, dtype=float), np.array(pub_us), 1)
     return {'a_us': float(a), 'b_us': float(b), 'c_us': float(np.median(sub_us)), 'readers': list(readers),
-            'pub_us': pub_us, 'messages': messages, 'repeat': repeat, 'read_us': read_costs()}
+            'pub_us': pub_us, 'pub_us_range': pub_range, 'sub_us_range': (min(sub_us), max(sub_us)),
+            'messages': messages, 'repeat': repeat, 'read_us': read_costs()}
 
 
 def read_costs(repeat: int = 2000) -> dict[str, dict[str, float]]:
@@ -184,10 +186,15 @@ def read_costs(repeat: int = 2000) -> dict[str, dict[str, float]]:
     return out
 
 
-def readers_per_topic() -> dict[str, int]:
-    """How many nodes (the recorder included) read each topic of the default graph."""
-    from alignment_ros.graph import MATCHED
-    return {topic: len(names) for sent in MATCHED.values() for topic, names in sent.items()}
+def readers_per_topic(run: Path | None = None) -> dict[str, int]:
+    """How many nodes (the recorder included) read each topic of a run's graph (its scenario.yaml:
+    the optional nodes' subscriptions too), or of the default graph."""
+    from alignment_ros.graph import MATCHED, matched_of
+    matched = MATCHED
+    if run is not None:
+        from alignment_core.config import scenario
+        matched = matched_of(scenario.load(str(run / 'scenario.yaml')))
+    return {topic: len(names) for sent in matched.values() for topic, names in sent.items()}
 
 
 def transport_bound(cost: dict, topics: dict[str, int], sim_time_s: float, cpus: int,
@@ -220,16 +227,18 @@ def main() -> None:
     cost = measure(a.messages, tuple(a.readers), a.repeat)
     print(f'{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; {a.messages} Odometry messages, '
           f'median of {a.repeat} runs per reader count')
-    for k, p in zip(cost['readers'], cost['pub_us']):
-        print(f'  publisher with {k} reader(s): {p:6.1f} us CPU per message')
-    print(f'  fit: publisher {cost["a_us"]:.1f} + {cost["b_us"]:.1f} us per reader; a subscriber {cost["c_us"]:.1f} us')
+    for k, p, (lo, hi) in zip(cost['readers'], cost['pub_us'], cost['pub_us_range']):
+        print(f'  publisher with {k} reader(s): {p:6.1f} us CPU per message ({lo:.1f}-{hi:.1f})')
+    lo, hi = cost['sub_us_range']
+    print(f'  fit: publisher {cost["a_us"]:.1f} + {cost["b_us"]:.1f} us per reader; a subscriber {cost["c_us"]:.1f} us '
+          f'({lo:.1f}-{hi:.1f})')
     print('reading a message from its bytes (rclpy against alignment_ros.wire):')
     for name, r in cost['read_us'].items():
         print(f'  {name:45s} {r["rclpy_us"]:6.1f} us  {r["wire_us"]:6.1f} us  ({r["rclpy_us"] / r["wire_us"]:.1f}x)')
     if a.run is not None:
         s = json.loads((a.run / 'summary.json').read_text())
         cpus = os.cpu_count() or 1
-        bound = transport_bound(cost, s['topics'], s['sim_time_s'], cpus)
+        bound = transport_bound(cost, s['topics'], s['sim_time_s'], cpus, readers_per_topic(a.run))
         print(f'run {a.run}: {bound["messages"]} messages, {bound["reads"]} reads; the transport alone '
               f'~{bound["transport_cpu_s"]:.1f} CPU s for {s["sim_time_s"]:g} simulated s, so at most '
               f'{bound["rtf_bound"]:.1f}x real time on {cpus} CPUs if nothing else cost anything')

@@ -47,12 +47,15 @@ def graph(rtf: float, plots: bool = False) -> dict:
         stats = {f.stem: json.loads(f.read_text()) for f in sorted((out / 'stats').glob('*.json'))
                  if f.stem != 'published'}
         cpu = {n: st.get('cpu_s') for n, st in stats.items()}     # every node's and the recorder's own CPU time
+        # ... and that of their start-up (a node's until it spun, the recorder's until its first message)
+        cpu_ready = {n: st.get('cpu_ready_s') for n, st in stats.items()}
         ack = max((st.get('ack_wait_s') or 0.0 for st in stats.values()), default=0.0)
         same = same_as_batch(out, s)
         return {'same_estimate': same, 'rtf_setting': rtf, 'streaming_rtf': s['sim_time_s'] / span,
                 'whole_run_rtf': s['real_time_factor'], 'lost': s['lost_total'],
                 'messages': sum(s['topics'].values()), 'topics': s['topics'], 'startup_s': s.get('startup_s'),
-                'sim_time_s': s['sim_time_s'], 'cpu_s': cpu, 'ack_wait_s': ack, 'command_s': command_s}
+                'sim_time_s': s['sim_time_s'], 'cpu_s': cpu, 'cpu_ready_s': cpu_ready, 'ack_wait_s': ack,
+                'command_s': command_s}
 
 
 def same_as_batch(out: Path, s: dict) -> bool:

@@ -145,7 +145,7 @@ def render(r: dict[str, Any]) -> str:
                   f"CPU per message published plus {dds['b_us']:.0f} us per reader, and {dds['c_us']:.0f} us per "
                   f"message a reader takes; over the graph runs' messages and readers that is "
                   + _list([b['transport_cpu_s'] for b in dds['runs']], lambda x: f'{x:.1f}')
-                  + " CPU s against the processes' "
+                  + " CPU s against the processes' (after their start-up) "
                   + _list([b['graph_cpu_s'] for b in dds['runs']], lambda x: f'{x:.1f}') + ' ('
                   + _list(share, lambda x: f'{100 * x:.0f} %') + '): the transport alone would allow '
                   + _list([b['rtf_bound'] for b in dds['runs']], lambda x: f'{x:.0f}x')

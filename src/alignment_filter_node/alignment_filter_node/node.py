@@ -143,7 +143,10 @@ class AlignmentFilterNode(node_util.CountingNode):
         self.last: Estimate | None = None
 
     def on_malformed(self, topic: str) -> None:
+        """A message that could not be read: counted, and /diagnostics says so at once (stamped with
+        the last output's time, or the scenario's start: the message had no readable stamp)."""
         self.inputs.malformed(topic)
+        self._publish([], self.last.t_ns if self.last is not None else self.sc.t0_ns)
 
     def on_imu(self, m: Imu) -> None:
         self._accept(topics.AIRCRAFT_IMU, self.inputs.imu(m), m)

@@ -43,6 +43,7 @@ from .launch import (
     domain_id,
     finish_recording,
     guarded_main,
+    malformed_inputs,
     number_type,
     published_counts,
     root,
@@ -329,6 +330,8 @@ def _summary(run: Run, sc: core_scenario.Scenario, wall: float, started: float) 
                                               sc.start_time_s + sc.duration_s))
     for node, n in unpaired_drops(run.out).items():
         run.problems.append(f'{node} dropped {n} unpaired half-samples (its input fell too far behind)')
+    for node, n in malformed_inputs(run.out).items():
+        run.problems.append(f'{node} rejected {n} input messages it could not read (malformed)')
     try:
         s = summary.summarise(bag, bag, sc.start_time_s, sc.duration_s, wall,
                               published_counts(run.out, with_held=True),

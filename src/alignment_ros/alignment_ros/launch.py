@@ -300,6 +300,17 @@ def unpaired_drops(out: Path) -> dict[str, int]:
     return drops
 
 
+def malformed_inputs(out: Path) -> dict[str, int]:
+    """Per node, the input messages it could not read (CountingNode.stream_subscription's
+    'malformed <topic>' counts); from the nodes' stats files."""
+    bad = {}
+    for f in sorted((out / 'stats').glob('*_node.json')):
+        n = sum(v for k, v in json.loads(f.read_text()).get('rejected', {}).items() if k.startswith('malformed '))
+        if n:
+            bad[f.stem] = int(n)
+    return bad
+
+
 def finish_recording(run: Run, expect_counts: Path, end_reached: bool = True) -> None:
     """End of a run, in order: stop the nodes (each exits once its subscribers acknowledged
     every message), give the recorder their published counts, wait until it has recorded them.

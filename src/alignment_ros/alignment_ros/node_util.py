@@ -5,6 +5,7 @@ exits)."""
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from collections import Counter, defaultdict
@@ -61,6 +62,9 @@ the writer back, so only a reader that is alive and takes nothing for this long 
 class CountingNode(Node):
     """A node that counts what it publishes and receives and can write them to a JSON file."""
 
+    cpu_ready_s: float | None = None
+    """This process's CPU time when the node began to spin (or run): its start-up's, set by run()."""
+
     executor_ref: Executor
     """The executor that spins the node (an EventsExecutor): set by run() before it spins or runs
     the node (a node that runs its own loop, the ship, spins it from there)."""
@@ -106,18 +110,23 @@ class CountingNode(Node):
                             on_malformed: Callable[[str], None] | None = None):
         """Subscribe to a stream (qos.STREAM) as bytes and hand `callback` the message read from
         them (alignment_ros/wire.py: rosbags' dataclass of msg_type, the same fields). Bytes that are
-        not such a message are rejected: counted under 'malformed <topic>' in `rejected`, logged,
-        passed to `on_malformed` (with the topic) if given, and the node goes on."""
+        not such a message are rejected: counted under 'malformed <topic>' in `rejected`, logged (at
+        most once a second per topic), passed to `on_malformed` (with the topic) if given, and the
+        node goes on."""
         read = wire.reader(msg_type)
         key = f'malformed {topic}'
+        logged = [-math.inf]                  # when this topic's last rejection was logged (once a second)
 
         def on_bytes(raw: bytes) -> None:
             try:
                 msg = read(raw)
             except wire.MalformedMessageError as e:
                 self.rejected[key] += 1
-                self.get_logger().error(f'{topic}: rejected a malformed message ({e}); '
-                                        f'{self.rejected[key]} so far', throttle_duration_sec=1.0)
+                now = time.monotonic()
+                if now - logged[0] >= 1.0:
+                    logged[0] = now
+                    self.get_logger().error(f'{topic}: rejected a malformed message ({e}); '
+                                            f'{self.rejected[key]} so far')
                 if on_malformed is not None:
                     on_malformed(topic)
                 return
@@ -206,7 +215,7 @@ class CountingNode(Node):
                 'ack_wait_s': None if self._ack_wait_s is None else round(self._ack_wait_s, 3),
                 'publish_waits': dict(self.publish_waits),
                 'publish_wait_s': {t: round(v, 3) for t, v in self.publish_wait_s.items()},
-                'cpu_s': time.process_time()}
+                'cpu_s': time.process_time(), 'cpu_ready_s': self.cpu_ready_s}
 
     def write_stats(self) -> None:
         path = self.get_parameter('stats_path').value
@@ -285,6 +294,7 @@ def run(node_factory, spin: bool = True) -> None:
     executor.add_node(node)
     node.executor_ref = executor
     failed = True          # an exception on its way out: a stuck teardown ends with status 1
+    node.cpu_ready_s = time.process_time()
     try:
         if spin:
             while rclpy.ok() and not stop['signal']:

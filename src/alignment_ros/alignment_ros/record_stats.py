@@ -46,6 +46,7 @@ def recording_stats(args: argparse.Namespace, rec: Recorder, writer: BagWriter, 
         'first_message_unix_s': rec.first_rx_unix,
         'receive_rate_msg_s': total / span if span > 0 else None,
         'cpu_s': time.process_time(),
+        'cpu_ready_s': rec.first_rx_cpu_s,
         'reorder': {'peak_bytes': writer.reorder.peak_bytes,
                     'peak_messages': writer.reorder.peak_messages, 'late': writer.reorder.late},
     }

@@ -101,6 +101,7 @@ class Recorder:
         self.max_stamp_ns = 0
         self.first_rx: float | None = None
         self.first_rx_unix: float | None = None    # wall clock, for a launcher's start-up time
+        self.first_rx_cpu_s: float | None = None   # this process's CPU time then (its start-up's)
         self.last_rx: float | None = None
         self.taken_directly = 0  # messages taken by take_pending() rather than by the executor
         self.subscriptions: dict[str, Any] = {}
@@ -205,6 +206,7 @@ class Recorder:
             self.last_rx = time.monotonic()
             if self.first_rx is None:
                 self.first_rx, self.first_rx_unix = self.last_rx, time.time()
+                self.first_rx_cpu_s = time.process_time()
 
         return on_message
 
