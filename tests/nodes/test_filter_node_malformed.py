@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import os
 import signal
-import subprocess
-from pathlib import Path
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -14,47 +12,28 @@ from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
 from support.ros_driving import spin_until
 
-from alignment_ros import domain, qos, topics
-
-ROOT = Path(__file__).resolve().parents[2]
-PARAMS = ROOT / 'config/params/catapult_paper.yaml'
+from alignment_ros import qos, topics
 
 
-def test_a_malformed_message_is_reported_at_once_and_the_node_goes_on():
-    dom = domain.claim()
-    rclpy.init(domain_id=dom)
-    node = rclpy.create_node('test_driver')
-    proc = subprocess.Popen([str(ROOT / 'scripts/start_node.sh'), 'alignment_filter_node', '--params-file',
-                             str(PARAMS), '--ros-args', '-p', 'hold_until_matched:=["/diagnostics:1"]'],
-                            env=dict(os.environ, ROS_DOMAIN_ID=str(dom)), stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
-    try:
-        pub = node.create_publisher(Odometry, topics.MASTER_ODOM, qos.STREAM)
-        diag: list[DiagnosticArray] = []
-        node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, diag.append, qos.STREAM)
-        spin_until(node, lambda: pub.get_subscription_count() >= 1, timeout=60.0)
-        raw = serialize_message(Odometry(child_frame_id='ship'))
-        pub.publish(raw[:-9])                          # cut short: no reader can take it
-        spin_until(node, lambda: len(diag) >= 1, timeout=30.0)
-        status = diag[-1].status[0]
-        values = {kv.key: kv.value for kv in status.values}
-        assert status.level == DiagnosticStatus.WARN
-        assert values['flags'] == 'malformed' and values['rejected_malformed'] == '1'
-        assert status.message.endswith('; 1 malformed messages rejected')
-        pub.publish(raw[:1])                           # the same flag: /diagnostics waits for an output
-        assert pub.wait_for_all_acked(rclpy.duration.Duration(seconds=10.0))
-        assert proc.poll() is None                     # still running
-        os.killpg(proc.pid, signal.SIGINT)
-        out, _ = proc.communicate(timeout=30)
-        assert proc.returncode == 0, out
-        assert 'rejected a malformed message' in out
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
-            try:
-                proc.wait(20)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-        node.destroy_node()
-        rclpy.shutdown()
-        domain.release(dom)
+def test_a_malformed_message_is_reported_at_once_and_the_node_goes_on(ros):
+    node, start = ros
+    proc = start('alignment_filter_node', '-p', 'hold_until_matched:=["/diagnostics:1"]')
+    pub = node.create_publisher(Odometry, topics.MASTER_ODOM, qos.STREAM)
+    diag: list[DiagnosticArray] = []
+    node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, diag.append, qos.STREAM)
+    spin_until(node, lambda: pub.get_subscription_count() >= 1, timeout=60.0)
+    raw = serialize_message(Odometry(child_frame_id='ship'))
+    pub.publish(raw[:-9])                          # cut short: no reader can take it
+    spin_until(node, lambda: len(diag) >= 1, timeout=30.0)
+    status = diag[-1].status[0]
+    values = {kv.key: kv.value for kv in status.values}
+    assert status.level == DiagnosticStatus.WARN
+    assert values['flags'] == 'malformed' and values['rejected_malformed'] == '1'
+    assert status.message.endswith('; 1 malformed messages rejected')
+    pub.publish(raw[:1])                           # the same flag: /diagnostics waits for an output
+    assert pub.wait_for_all_acked(rclpy.duration.Duration(seconds=10.0))
+    assert proc.poll() is None                     # still running
+    os.killpg(proc.pid, signal.SIGINT)
+    out, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 0, out
+    assert 'rejected a malformed message' in out
