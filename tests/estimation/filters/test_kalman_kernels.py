@@ -34,6 +34,14 @@ def _in_place(kernel, x, p, *rest) -> tuple:
     return (*(() if out is None else out), x, p)
 
 
+def _update(kernel, x, p, z, h, r, gate) -> tuple:
+    """(y, S, nis, accepted, x+, P+) of one update kernel call, y and S in z - H x's and S's
+    dtypes as the filter allocates them."""
+    y, s = np.empty(z.shape, np.result_type(z, x)), np.empty(r.shape, np.result_type(p, r))
+    nis, accepted, x_new, p_new = _in_place(kernel, x, p, z, h, r, gate, y, s)
+    return y, s, nis, accepted, x_new, p_new
+
+
 def _same(a, b) -> bool:
     return type(a) is type(b) and (a == b or (a != a and b != b)) if not isinstance(a, np.ndarray) else \
         a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
@@ -47,9 +55,12 @@ def test_update_compiled_equals_interpreted(selecting, dtypes):
         args = _problem(rng, *dtypes, selecting=selecting)
         x, p, z, h, r = args
         for gate in (np.inf, 2.0):
-            got = _in_place(kk.update, x, p, z, h, r, gate)
-            want = _in_place(kk.update.py_func, x, p, z, h, r, gate)
+            got = _update(kk.update, x, p, z, h, r, gate)
+            want = _update(kk.update.py_func, x, p, z, h, r, gate)
             assert all(_same(a, b) for a, b in zip(got, want))
+            y, s, *_ = got
+            inn = kk.innovation(x, p, z, h, r)
+            assert _same(y, inn[0]) and _same(s, inn[2])
 
 
 @pytest.mark.parametrize('selecting', [True, False])
@@ -160,9 +171,9 @@ def test_a_non_finite_s_is_not_accepted_and_a_singular_one_raises():
     x, p, z, h, r = _problem(rng, selecting=False)
     bad = r.copy()
     bad[0, 0] = np.nan
-    x1, p1 = x.copy(), p.copy()
-    y, s, nis, accepted = kk.update(x1, p1, z, h, bad, np.inf)
+    y, s, nis, accepted, x1, p1 = _update(kk.update, x, p, z, h, bad, np.inf)
     assert np.isnan(nis) and not accepted and np.array_equal(x1, x) and np.array_equal(p1, p)
+    assert np.isnan(s[0, 0]) and np.allclose(y, z - h @ x, rtol=1e-14, atol=1e-14)
     kf = KalmanFilter(x, p)
     with pytest.raises(np.linalg.LinAlgError):
         kf.update(z, np.zeros_like(h), np.zeros_like(r))      # S = 0: singular

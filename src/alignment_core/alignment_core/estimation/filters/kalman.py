@@ -14,11 +14,13 @@ _INF = float('inf')
 
 
 _NDARRAY = np.ndarray
+_empty = np.empty
 
 
 def _ready(a, dtype: np.dtype) -> np.ndarray:
     """a in dtype, in one block of memory (C or Fortran order): a kernel's BLAS call would copy
-    any other layout itself, with a performance warning."""
+    any other layout itself, with a performance warning. The methods test the usual case (the
+    first line) inline before calling it: the call costs as much as the test."""
     if type(a) is _NDARRAY and a.dtype is dtype and a.flags.c_contiguous:     # the usual case
         return a
     a = as_dtype(a, dtype)
@@ -98,7 +100,11 @@ class KalmanFilter(Counters):
         dt = self.dtype
         if self._x_out or self._p_out:
             self._own()
-        kernels.predict(self._x, self._P, _ready(phi, dt), _ready(qd, dt))
+        if not (type(phi) is _NDARRAY and phi.dtype is dt and phi.flags.c_contiguous):   # _ready's usual case inline
+            phi = _ready(phi, dt)
+        if not (type(qd) is _NDARRAY and qd.dtype is dt and qd.flags.c_contiguous):
+            qd = _ready(qd, dt)
+        kernels.predict(self._x, self._P, phi, qd)
         self.n_predicts += 1
 
     def _innovation(self, z, h, r, x, p):
@@ -108,14 +114,21 @@ class KalmanFilter(Counters):
     def update(self, z: np.ndarray, h: np.ndarray, r: np.ndarray,
                gate_chi2: float | None = None) -> UpdateResult:
         dt = self.dtype
-        z, h, r = _ready(z, dt), _ready(h, dt), _ready(r, dt)
+        if not (type(z) is _NDARRAY and z.dtype is dt and z.flags.c_contiguous):    # _ready's usual case inline
+            z = _ready(z, dt)
+        if not (type(h) is _NDARRAY and h.dtype is dt and h.flags.c_contiguous):
+            h = _ready(h, dt)
+        if not (type(r) is _NDARRAY and r.dtype is dt and r.flags.c_contiguous):
+            r = _ready(r, dt)
         if z.ndim == 0:                       # one measurement given as a scalar
             z = z.reshape(1)
         if self._x_out or self._p_out:
             self._own()
+        m = z.shape[0]
+        y, s = _empty(m, dt), _empty((m, m), dt)      # x, P, z, h, r are all in dt
         try:
-            y, s, nis, accepted = kernels.update(self._x, self._P, z, h, r,
-                                                 _INF if gate_chi2 is None else gate_chi2)
+            nis, accepted = kernels.update(self._x, self._P, z, h, r, _INF if gate_chi2 is None else gate_chi2,
+                                           y, s)
         except np.linalg.LinAlgError:           # S singular
             nis = math.nan
         if not 0.0 <= nis < _INF:

@@ -57,15 +57,19 @@ def _overloads() -> None:
 def predict(x, p, phi, qd):
     """x <- Phi x, P <- Phi P Phi^T + Qd, in place."""
     x[:] = dot(phi, x)
-    p[:] = dot(dot(phi, p), phi.T) + qd
+    pp = dot(dot(phi, p), phi.T)
+    n = p.shape[0]
+    for i in range(n):                 # p[:] = pp + qd without the temporary
+        for j in range(n):
+            p[i, j] = pp[i, j] + qd[i, j]
 
 
 @kernel
-def innovation(x, p, z, h, r):
-    """(y = z - H x, P H^T, S = H P H^T + R), the products over H's non-zero cells only (a
-    selecting H, e.g. velocity matching's [0 I 0], costs a copy of P's columns)."""
+def products(x, p, h):
+    """(H x, P H^T, H P H^T) over H's non-zero cells only (a selecting H, e.g. velocity
+    matching's [0 I 0], costs a copy of P's columns)."""
     n = x.shape[0]
-    m = z.shape[0]
+    m = h.shape[0]
     ph = np.zeros((n, m), p.dtype)
     hx = np.zeros(m, x.dtype)
     for j in range(m):
@@ -75,31 +79,42 @@ def innovation(x, p, z, h, r):
                 hx[j] += v * x[l]
                 for i in range(n):
                     ph[i, j] += p[i, l] * v
-    s = np.zeros((m, m), p.dtype)
+    hph = np.zeros((m, m), p.dtype)
     for j in range(m):
         for l in range(n):
             v = h[j, l]
             if v != 0.0:
                 for c in range(m):
-                    s[j, c] += v * ph[l, c]
-    return z - hx, ph, s + r
+                    hph[j, c] += v * ph[l, c]
+    return hx, ph, hph
 
 
 @kernel
-def update(x, p, z, h, r, gate):
-    """One measurement update: (y, S, nis, accepted), x <- x+ and P <- P+ in place if accepted.
-    Not accepted when nis > gate, when S is not finite (nis is then NaN) or when nis < 0 (S not
-    positive definite: the caller raises). A singular S raises np.linalg.LinAlgError; x and P are
-    unchanged unless accepted."""
-    y, ph, s = innovation(x, p, z, h, r)
+def innovation(x, p, z, h, r):
+    """(y = z - H x, P H^T, S = H P H^T + R) (`products`)."""
+    hx, ph, hph = products(x, p, h)
+    return z - hx, ph, hph + r
+
+
+@kernel
+def update(x, p, z, h, r, gate, y, s):
+    """One measurement update: y <- z - H x and S <- H P H^T + R, written into the caller's
+    arrays (of z - H x's and S's dtypes: a kernel's returned array costs more to hand back than
+    it costs to allocate in Python); returns (nis, accepted), x <- x+ and P <- P+ in place if
+    accepted. Not accepted when nis > gate, when S is not finite (nis is then NaN) or when
+    nis < 0 (S not positive definite: the caller raises). A singular S raises
+    np.linalg.LinAlgError; x and P are unchanged unless accepted."""
+    hx, ph, hph = products(x, p, h)
+    y[:] = z - hx
+    s[:] = hph + r
     if not np.all(np.isfinite(s)):
-        return y, s, np.nan, False
+        return np.nan, False
     s_inv = inverse(s)
     nis = float(dot(dot(y, s_inv), y))
     if not 0.0 <= nis < np.inf or nis > gate:
-        return y, s, nis, False
+        return nis, False
     joseph(x, p, ph, s_inv, y, h, r)
-    return y, s, nis, True
+    return nis, True
 
 
 @kernel
@@ -139,5 +154,8 @@ def joseph(x, p, ph, s_inv, y, h, r):
             v = d[i, j]
             for c in range(n):
                 a[i, c] += v * kt[j, c]
-    p[:] = a + a.T
-    p *= 0.5
+    for i in range(n):                             # p[:] = (a + a.T) * 0.5, a sum being symmetric
+        for c in range(i, n):
+            v = (a[i, c] + a[c, i]) * 0.5
+            p[i, c] = v
+            p[c, i] = v
