@@ -89,6 +89,27 @@ def test_numba_is_imported_on_the_first_kernel_call_and_the_kernels_become_dispa
     assert out == ['False', 'Kernel', 'Kernel', 'True', 'CPUDispatcher', 'CPUDispatcher']
 
 
+def test_a_process_forked_after_activating_finds_numba_s_registries_loaded():
+    """What the graph's launcher relies on: activate() loads numba's typing and target registries
+    (the linalg and array implementations the kernels use), which importing numba does not, so a
+    node forked after it does not load them again at its first kernel call."""
+    code = ('import os, sys\n'
+            'import numba\n'
+            'from numba.core.registry import cpu_target\n'
+            'before = "numba.np.linalg" in sys.modules, len(cpu_target.target_context._registries)\n'
+            'from alignment_core import compiled\n'
+            'compiled.activate()\n'
+            'pid = os.fork()\n'
+            'if pid == 0:\n'
+            '    print(*before, "numba.np.linalg" in sys.modules, len(cpu_target.target_context._registries) > 0)\n'
+            '    sys.stdout.flush()\n'
+            '    os._exit(0)\n'
+            'os.waitpid(pid, 0)\n')
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True,
+                         env=dict(os.environ)).stdout.split()
+    assert out == ['False', '0', 'True', 'True']
+
+
 def test_compiled_and_interpreted_agree_on_a_kernel_with_blas():
     def gram(a):
         return np.dot(a.T, a) + np.dot(a, a.T)
