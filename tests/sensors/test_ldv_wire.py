@@ -88,3 +88,34 @@ def test_a_stream_decodes_to_the_bits_of_each_matrix_decomposed_alone():
         for a, b in zip(streamed, stream):
             _same_bits(a, b)
     assert list(ldv_wire.transmitted_stream([], 7)) == []
+
+
+def test_one_message_decodes_to_the_bits_of_the_stack_whatever_its_covariance():
+    """The filter node decodes each message alone (decode), the batch pipeline stacks them
+    (decode_all): the same sample for any covariance a publisher may send (asymmetric, rank 2,
+    zero or negative trace, NaN or inf cells, a negative first cell) as for the LDV's own."""
+    rng = np.random.default_rng(3)
+    covs = []
+    for s in _samples(100):
+        covs.append(ldv_wire.encode(s)[1])
+    for _ in range(300):
+        c = rng.normal(size=(3, 3)) * 10.0 ** rng.integers(-6, 3)
+        kind = rng.integers(6)
+        if kind == 1:
+            u = rng.normal(size=(3, 2))
+            c = u @ u.T                                  # rank 2
+        elif kind == 2:
+            c[rng.integers(3), rng.integers(3)] = rng.choice([np.nan, np.inf, -np.inf])
+        elif kind == 3:
+            c = -np.abs(c)
+        elif kind == 4:
+            u = rng.normal(size=3)
+            c = np.outer(u, u) * (1.0 + 1e-12 * rng.normal(size=(3, 3)))   # a beam, perturbed
+        covs.append(c)
+    covs.append(np.zeros((3, 3)))
+    linear = rng.normal(size=(len(covs), 3))
+    stack = ldv_wire.decode_all(list(range(len(covs))), linear, np.array(covs))
+    for k, (v, c, want) in enumerate(zip(linear, covs, stack)):
+        _same_bits(ldv_wire.decode(k, v, c), want)
+    kinds = [(s.valid, s.beam is not None) for s in stack]
+    assert kinds.count((False, False)) > 50 and kinds.count((True, True)) > 100 and kinds.count((True, False)) > 50
