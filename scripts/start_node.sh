@@ -4,7 +4,9 @@
 # Without --params-file the node runs the default scenario (config/params/graph.yaml).
 # Scenario keys on top (-p aircraft.lever_arm_m:=[60.0,-15.0,20.0]) act as run_graph.sh's --set:
 # the node resolves them with the same rules. An unknown or wrong-typed parameter stops the node
-# at start-up (exit status 2, one line naming it).
+# at start-up (exit status 2, one line naming it). The nodes run on the stamps of their inputs and
+# never read ROS time, so they are not started with use_sim_time (a /clock reader costs each
+# node CPU for every ship sample).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 [ -f "$ROOT/scripts/env.sh" ] && [ -d "$ROOT/ros2_ws/install" ] || "$ROOT/scripts/setup.sh"
@@ -21,4 +23,4 @@ while [ $# -gt 0 ]; do
     *) EXTRA+=("$1"); shift ;;
   esac
 done
-exec "$EXE" --ros-args --params-file "$PARAMS" -p use_sim_time:=true "${EXTRA[@]}"
+exec "$EXE" --ros-args --params-file "$PARAMS" "${EXTRA[@]}"

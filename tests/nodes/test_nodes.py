@@ -45,6 +45,23 @@ def test_master_node_equals_its_core_stage(ros):
             np.testing.assert_allclose(getattr(have, f), getattr(want, f), rtol=0, atol=1e-12)
 
 
+def test_a_node_started_by_the_scripts_does_not_read_the_clock(ros):
+    """The nodes run on their inputs' stamps and never read ROS time: started as start_node.sh
+    (and the launcher) start them, without use_sim_time, they keep no /clock subscription (rclpy's
+    reader costs an idle node 1-1.6 CPU s per default run); with use_sim_time set, one would
+    subscribe (the check's control)."""
+    node, start = ros
+    start('master_ins_node')
+    start('ldv_node', '-p', 'use_sim_time:=true')
+
+    def readers() -> list[str]:
+        return [i.node_name for i in node.get_subscriptions_info_by_topic(topics.CLOCK)]
+
+    spin_until(node, lambda: node.count_publishers(topics.MASTER_ODOM) >= 1 and 'ldv_node' in readers())
+    time.sleep(1.0)                  # a node's endpoints are announced together
+    assert 'master_ins_node' not in readers()
+
+
 def test_filter_node_rejects_bad_input_and_reports_it(ros):
     node, start = ros
     sc = scenario.load('catapult_paper')

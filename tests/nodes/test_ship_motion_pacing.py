@@ -57,11 +57,12 @@ def test_simulation_time_advances_at_the_real_time_factor(ros):
 
 
 def test_the_clock_source_does_not_listen_to_its_own_clock(ros):
-    """Started with use_sim_time (as start_node.sh starts every node), ship_motion_node keeps
-    wall time: no subscription of its own on /clock, whose events would pile up between its
-    spins (the node's memory grew by ~46 MiB per simulated hour that way)."""
+    """Started with use_sim_time (a user may set it), ship_motion_node keeps wall time: no
+    subscription of its own on /clock, whose events would pile up between its spins (the node's
+    memory grew by ~46 MiB per simulated hour that way)."""
     node, start = ros
-    start('ship_motion_node', '-p', f'wait_subscribers:=["{GO}:1"]', '-p', 'wait_timeout_s:=60.0')
+    start('ship_motion_node', '-p', f'wait_subscribers:=["{GO}:1"]', '-p', 'wait_timeout_s:=60.0',
+          '-p', 'use_sim_time:=true')
 
     def publishers_seen() -> bool:
         return any(i.node_name == 'ship_motion_node'

@@ -176,7 +176,7 @@ def start(run: Run, name: str, params: Path, *args: str,
         ros_args += ['-p', _list_param('hold_until_matched', matched[name])]
     if fork:
         exe = root() / 'ros2_ws' / 'install' / name / 'lib' / name / name
-        argv = [str(exe), '--ros-args', '--params-file', str(params), '-p', 'use_sim_time:=true', *ros_args]
+        argv = [str(exe), '--ros-args', '--params-file', str(params), *ros_args]
         with log:
             return run.fork(name, forked.entry_point(name), argv, log)
     cmd = [str(root() / 'scripts' / 'start_node.sh'), name, '--params-file', str(params), '--ros-args', *ros_args]

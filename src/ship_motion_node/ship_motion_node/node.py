@@ -26,9 +26,10 @@ CHUNK = 25   # ship samples computed at once (0.25 s at 100 Hz)
 class ShipMotionNode(node_util.CountingNode):
     def __init__(self) -> None:
         super().__init__('ship_motion_node')
-        # the source of /clock keeps wall time: with use_sim_time (start_node.sh sets it for every
-        # node) it would subscribe to its own /clock, and that subscription's events pile up in
-        # the executor between the rare spins of run() (100 per simulated second, ~46 MiB/h)
+        # the source of /clock keeps wall time: with use_sim_time (a user may set it; the scripts
+        # start no node with it) it would subscribe to its own /clock, and that subscription's
+        # events pile up in the executor between the rare spins of run() (100 per simulated
+        # second, ~46 MiB/h)
         self.set_parameters([Parameter('use_sim_time', value=False)])
         self.declare_parameter('real_time_factor', 5.0, ParameterDescriptor(
             description='simulation speed: 1 = real time, 0 = as fast as possible'))
