@@ -28,6 +28,7 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -47,10 +48,11 @@ def _qos():
     return qos.STREAM
 
 
-def publisher(messages: int, readers: int) -> dict:
+def publisher(messages: int, readers: int, report: Callable[[dict], None]) -> None:
     """Publish `messages` Odometry messages, serialized beforehand (rclpy's conversion of a Python
     message is the node's cost, not the transport's), once `readers` subscribers have matched; CPU
-    per message from the first publish until every reader has acknowledged the last."""
+    per message from the first publish until every reader has acknowledged the last, reported
+    before the node's teardown (which can hang: the parent then stops the process)."""
     import rclpy
     from nav_msgs.msg import Odometry
     from rclpy.duration import Duration
@@ -81,15 +83,16 @@ def publisher(messages: int, readers: int) -> dict:
             time.sleep(PAUSE_S)
     acked = pub.wait_for_all_acked(Duration(seconds=TIMEOUT_S))
     cpu = time.process_time() - c0
-    node.destroy_node()
-    rclpy.shutdown()
     if not acked:
         raise RuntimeError(f'the readers did not acknowledge every message within {TIMEOUT_S:g} s')
-    return {'role': 'pub', 'readers': readers, 'us_per_msg': 1e6 * cpu / messages}
+    report({'role': 'pub', 'readers': readers, 'us_per_msg': 1e6 * cpu / messages})
+    node.destroy_node()
+    rclpy.shutdown()
 
 
-def subscriber(messages: int) -> dict:
-    """Take `messages` messages as bytes; CPU per message from the first to the last."""
+def subscriber(messages: int, report: Callable[[dict], None]) -> None:
+    """Take `messages` messages as bytes; CPU per message from the first to the last, reported
+    before the node's teardown."""
     import rclpy
     from nav_msgs.msg import Odometry
     from rclpy.experimental import EventsExecutor
@@ -110,13 +113,32 @@ def subscriber(messages: int) -> dict:
         executor.spin_once(timeout_sec=0.01)
     cpu = time.process_time() - c0
     taken = got[0]
+    report({'role': 'sub', 'taken': taken, 'us_per_msg': 1e6 * cpu / max(taken - 1, 1)})
     node.destroy_node()
     rclpy.shutdown()
-    return {'role': 'sub', 'taken': taken, 'us_per_msg': 1e6 * cpu / max(taken - 1, 1)}
 
 
-def one_setting(messages: int, readers: int) -> tuple[float, list[float]]:
-    """(publisher us per message, each subscriber's) with `readers` subscribers, on a free domain."""
+def _result(p: subprocess.Popen, timeout: float) -> tuple[dict | None, bool]:
+    """(the last line a role process printed, parsed, or None; whether it had to be killed: it did
+    not end within `timeout` s, e.g. stuck in its DDS teardown after it reported)."""
+    killed = False
+    try:
+        out, _ = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        out, _ = p.communicate()
+        killed = True
+    lines = (out or '').strip().splitlines()
+    try:
+        return (json.loads(lines[-1]) if lines else None), killed
+    except json.JSONDecodeError:
+        return None, killed
+
+
+def one_setting(messages: int, readers: int) -> tuple[float, list[float], int]:
+    """(publisher us per message, each subscriber's, how many processes had to be stopped after
+    they reported) with `readers` subscribers, on a free domain. RuntimeError when a process
+    reported nothing or a subscriber missed messages."""
     from alignment_ros import domain
     dom = domain.claim()
     try:
@@ -125,38 +147,61 @@ def one_setting(messages: int, readers: int) -> tuple[float, list[float]]:
         subs = [subprocess.Popen([*cmd, '--role', 'sub'], env=env, stdout=subprocess.PIPE, text=True)
                 for _ in range(readers)]
         try:
-            pub = subprocess.run([*cmd, '--role', 'pub', '--readers', str(readers)], env=env, capture_output=True,
-                                 text=True, timeout=4 * TIMEOUT_S)
-            outs = [s.communicate(timeout=4 * TIMEOUT_S)[0] for s in subs]
+            pub = subprocess.Popen([*cmd, '--role', 'pub', '--readers', str(readers)], env=env,
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            pub_out, pub_killed = _result(pub, 4 * TIMEOUT_S)
+            got = [_result(s, TIMEOUT_S) for s in subs]     # they end with the publisher's last message
         finally:
-            for sub in subs:
-                if sub.poll() is None:
-                    sub.kill()
-                    sub.wait()
+            for p in (*subs, pub):
+                if p.poll() is None:
+                    p.kill()
+                    p.wait()
     finally:
         domain.release(dom)
-    if pub.returncode != 0:
-        raise RuntimeError(pub.stderr)
-    got = [json.loads(o.strip().splitlines()[-1]) for o in outs]
-    short = [g['taken'] for g in got if g['taken'] != messages]
+    if pub_out is None:
+        raise RuntimeError(f'the publisher reported nothing: {pub.stderr.read() if pub.stderr else ""}'.strip())
+    missing = [g for g, _ in got if g is None]
+    if missing:
+        raise RuntimeError(f'{len(missing)} of {readers} subscribers reported nothing')
+    short = [g['taken'] for g, _ in got if g['taken'] != messages]      # type: ignore[index]
     if short:
         raise RuntimeError(f'subscribers took {short} of {messages} messages')
-    return json.loads(pub.stdout.strip().splitlines()[-1])['us_per_msg'], [g['us_per_msg'] for g in got]
+    stuck = pub_killed + sum(k for _, k in got)
+    return pub_out['us_per_msg'], [g['us_per_msg'] for g, _ in got], stuck     # type: ignore[index]
+
+
+ATTEMPTS = 3
+"""A setting whose processes fail (a subscriber that misses the match, a process that reports
+nothing) is run again, up to this many times in all."""
+
+
+def _setting(messages: int, readers: int, failures: list[str]) -> tuple[float, list[float], int]:
+    """one_setting, run again after a failure (each kept in `failures`) up to ATTEMPTS times."""
+    for attempt in range(ATTEMPTS):
+        try:
+            return one_setting(messages, readers)
+        except RuntimeError as e:
+            failures.append(f'{readers} readers: {e}')
+            if attempt == ATTEMPTS - 1:
+                raise
+    raise AssertionError('unreachable')
 
 
 def measure(messages: int = 3000, readers: tuple[int, ...] = (1, 2, 4), repeat: int = 3) -> dict:
     """a, b (publisher: a + b k us per message with k readers) and c (a subscriber's us per
     message), each from the medians over `repeat` runs of every k."""
-    pub_us, pub_range, sub_us = [], [], []
+    pub_us, pub_range, sub_us, failures, stuck = [], [], [], [], 0
     for k in readers:
-        runs = [one_setting(messages, k) for _ in range(repeat)]
-        pub_us.append(float(np.median([p for p, _ in runs])))
-        pub_range.append((min(p for p, _ in runs), max(p for p, _ in runs)))
-        sub_us.extend(s for _, ss in runs for s in ss)
+        runs = [_setting(messages, k, failures) for _ in range(repeat)]
+        pub_us.append(float(np.median([p for p, _, _ in runs])))
+        pub_range.append((min(p for p, _, _ in runs), max(p for p, _, _ in runs)))
+        sub_us.extend(s for _, ss, _ in runs for s in ss)
+        stuck += sum(n for _, _, n in runs)
     b, a = np.polyfit(np.array(readers, dtype=float), np.array(pub_us), 1)
     return {'a_us': float(a), 'b_us': float(b), 'c_us': float(np.median(sub_us)), 'readers': list(readers),
             'pub_us': pub_us, 'pub_us_range': pub_range, 'sub_us_range': (min(sub_us), max(sub_us)),
-            'messages': messages, 'repeat': repeat, 'read_us': read_costs()}
+            'messages': messages, 'repeat': repeat, 'read_us': read_costs(), 'failures': failures,
+            'stopped_after_report': stuck}
 
 
 def read_costs(repeat: int = 2000) -> dict[str, dict[str, float]]:
@@ -218,11 +263,13 @@ def main() -> None:
     ap.add_argument('--run', type=Path, help="a graph run's output directory (its summary.json)")
     ap.add_argument('--role', choices=('pub', 'sub'), help=argparse.SUPPRESS)
     a = ap.parse_args()
+    def report(d: dict) -> None:
+        print(json.dumps(d), flush=True)
     if a.role == 'pub':
-        print(json.dumps(publisher(a.messages, a.readers[0])))
+        publisher(a.messages, a.readers[0], report)
         return
     if a.role == 'sub':
-        print(json.dumps(subscriber(a.messages)))
+        subscriber(a.messages, report)
         return
     cost = measure(a.messages, tuple(a.readers), a.repeat)
     print(f'{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; {a.messages} Odometry messages, '

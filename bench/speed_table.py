@@ -154,6 +154,11 @@ def render(r: dict[str, Any]) -> str:
         if odom:
             lines[-1] += (f" Reading an Odometry from its bytes took {odom['rclpy_us']:.0f} us through rclpy's "
                           f"conversion and {odom['wire_us']:.0f} us through the nodes' reader (alignment_ros/wire.py).")
+        failures, stopped = dds.get('failures') or [], dds.get('stopped_after_report') or 0
+        if failures or stopped:
+            lines[-1] += (f" In that benchmark {len(failures)} setting(s) failed and ran again"
+                          + (f" ({'; '.join(failures)})" if failures else '')
+                          + f", and {stopped} process(es) hung after reporting and were stopped.")
     peer = r.get('pyins')
     if peer and 'engine' in r:
         lines += ['', f"pyins' `run_feedback_filter` in the same run: {peer['pyins_us']:.0f} us per step, "

@@ -29,3 +29,36 @@ def test_the_graph_readers_count_the_recorder_and_every_subscribing_node():
     readers = dds_cost.readers_per_topic()
     assert readers['/ship/odom'] == 4 and readers['/aircraft/imu'] == 2
     assert all('recorder' in names for sent in MATCHED.values() for names in sent.values())
+
+
+def test_a_process_that_reports_and_then_hangs_is_stopped_and_its_report_kept():
+    """A role process can hang in its DDS teardown after it printed its result (a publish was
+    lost that way): the parent stops it after the timeout and keeps the line; one that printed
+    nothing gives None."""
+    import subprocess
+    import sys
+    hang = subprocess.Popen([sys.executable, '-c', 'import json, time; print(json.dumps({"taken": 3}), flush=True); '
+                             'time.sleep(60)'], stdout=subprocess.PIPE, text=True)
+    assert dds_cost._result(hang, 1.0) == ({'taken': 3}, True)
+    quiet = subprocess.Popen([sys.executable, '-c', 'pass'], stdout=subprocess.PIPE, text=True)
+    assert dds_cost._result(quiet, 10.0) == (None, False)
+
+
+def test_a_failed_setting_is_run_again_and_its_failures_kept(monkeypatch):
+    calls = []
+
+    def flaky(messages, readers):
+        calls.append(readers)
+        if len(calls) < dds_cost.ATTEMPTS:
+            raise RuntimeError('1 of 2 subscribers reported nothing')
+        return 10.0, [15.0, 16.0], 1
+    monkeypatch.setattr(dds_cost, 'one_setting', flaky)
+    failures: list[str] = []
+    assert dds_cost._setting(100, 2, failures) == (10.0, [15.0, 16.0], 1)
+    assert failures == ['2 readers: 1 of 2 subscribers reported nothing'] * (dds_cost.ATTEMPTS - 1)
+
+    def always_fails(messages, readers):
+        raise RuntimeError('never')
+    monkeypatch.setattr(dds_cost, 'one_setting', always_fails)
+    with pytest.raises(RuntimeError, match='never'):
+        dds_cost._setting(100, 2, failures)

@@ -133,3 +133,15 @@ def test_the_transport_line_gives_its_share_of_each_run():
     assert line.endswith("Reading an Odometry from its bytes took 40 us through rclpy's conversion and 8 us "
                          "through the nodes' reader (alignment_ros/wire.py).")
     assert 'The DDS transport' not in speed_table.render(run())
+
+
+def test_the_transport_line_says_when_its_benchmark_ran_a_setting_again():
+    dds = {'a_us': 30.0, 'b_us': 5.0, 'c_us': 20.0, 'failures': [], 'stopped_after_report': 0,
+           'runs': [{'transport_cpu_s': 4.0, 'graph_cpu_s': 20.0, 'rtf_bound': 34.0}]}
+
+    def line() -> str:
+        return next(x for x in speed_table.render(run(dds=dds)).split('\n') if x.startswith('The DDS transport'))
+    assert 'ran again' not in line()
+    dds['failures'], dds['stopped_after_report'] = ['2 readers: 1 of 2 subscribers reported nothing'], 1
+    assert line().endswith('In that benchmark 1 setting(s) failed and ran again (2 readers: 1 of 2 subscribers '
+                           'reported nothing), and 1 process(es) hung after reporting and were stopped.')
