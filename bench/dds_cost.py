@@ -118,21 +118,22 @@ def subscriber(messages: int, report: Callable[[dict], None]) -> None:
     rclpy.shutdown()
 
 
-def _result(p: subprocess.Popen, timeout: float) -> tuple[dict | None, bool]:
+def _result(p: subprocess.Popen, timeout: float) -> tuple[dict | None, bool, str]:
     """(the last line a role process printed, parsed, or None; whether it had to be killed: it did
-    not end within `timeout` s, e.g. stuck in its DDS teardown after it reported)."""
+    not end within `timeout` s, e.g. stuck in its DDS teardown after it reported; its stderr, if
+    piped)."""
     killed = False
     try:
-        out, _ = p.communicate(timeout=timeout)
+        out, err = p.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
         p.kill()
-        out, _ = p.communicate()
+        out, err = p.communicate()
         killed = True
     lines = (out or '').strip().splitlines()
     try:
-        return (json.loads(lines[-1]) if lines else None), killed
+        return (json.loads(lines[-1]) if lines else None), killed, err or ''
     except json.JSONDecodeError:
-        return None, killed
+        return None, killed, err or ''
 
 
 def one_setting(messages: int, readers: int) -> tuple[float, list[float], int]:
@@ -144,22 +145,22 @@ def one_setting(messages: int, readers: int) -> tuple[float, list[float], int]:
     try:
         env = {**os.environ, 'ROS_DOMAIN_ID': str(dom)}
         cmd = [sys.executable, __file__, '--messages', str(messages)]
-        subs = [subprocess.Popen([*cmd, '--role', 'sub'], env=env, stdout=subprocess.PIPE, text=True)
-                for _ in range(readers)]
+        procs = [subprocess.Popen([*cmd, '--role', 'sub'], env=env, stdout=subprocess.PIPE, text=True)
+                 for _ in range(readers)]
         try:
-            pub = subprocess.Popen([*cmd, '--role', 'pub', '--readers', str(readers)], env=env,
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-            pub_out, pub_killed = _result(pub, 4 * TIMEOUT_S)
-            got = [_result(s, TIMEOUT_S) for s in subs]     # they end with the publisher's last message
+            procs.append(subprocess.Popen([*cmd, '--role', 'pub', '--readers', str(readers)], env=env,
+                                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
+            pub_out, pub_killed, pub_err = _result(procs[-1], 4 * TIMEOUT_S)
+            got = [_result(s, TIMEOUT_S)[:2] for s in procs[:readers]]   # they end with the publisher's last message
         finally:
-            for p in (*subs, pub):
+            for p in procs:
                 if p.poll() is None:
                     p.kill()
                     p.wait()
     finally:
         domain.release(dom)
     if pub_out is None:
-        raise RuntimeError(f'the publisher reported nothing: {pub.stderr.read() if pub.stderr else ""}'.strip())
+        raise RuntimeError(f'the publisher reported nothing: {pub_err.strip()}'.strip())
     missing = [g for g, _ in got if g is None]
     if missing:
         raise RuntimeError(f'{len(missing)} of {readers} subscribers reported nothing')

@@ -102,12 +102,17 @@ def test_a_process_forked_after_activating_finds_numba_s_registries_loaded():
             'pid = os.fork()\n'
             'if pid == 0:\n'
             '    print(*before, "numba.np.linalg" in sys.modules, len(cpu_target.target_context._registries) > 0)\n'
+            '    import numpy as np\n'
+            '    from alignment_core.estimation.filters.kalman import KalmanFilter\n'
+            '    kf = KalmanFilter(np.zeros(3), np.eye(3))\n'
+            '    kf.predict(np.eye(3), np.eye(3))\n'
+            '    print(kf.P[0, 0])\n'
             '    sys.stdout.flush()\n'
             '    os._exit(0)\n'
             'os.waitpid(pid, 0)\n')
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True,
                          env=dict(os.environ)).stdout.split()
-    assert out == ['False', '0', 'True', 'True']
+    assert out == ['False', '0', 'True', 'True', '2.0']       # and its kernels run: P = I I I + I
 
 
 def test_compiled_and_interpreted_agree_on_a_kernel_with_blas():

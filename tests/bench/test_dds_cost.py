@@ -31,17 +31,24 @@ def test_the_graph_readers_count_the_recorder_and_every_subscribing_node():
     assert all('recorder' in names for sent in MATCHED.values() for names in sent.values())
 
 
-def test_a_process_that_reports_and_then_hangs_is_stopped_and_its_report_kept():
+def test_a_process_that_reports_and_then_hangs_is_stopped_and_its_report_kept(tmp_path):
     """A role process can hang in its DDS teardown after it printed its result (a publish was
     lost that way): the parent stops it after the timeout and keeps the line; one that printed
     nothing gives None."""
     import subprocess
     import sys
-    hang = subprocess.Popen([sys.executable, '-c', 'import json, time; print(json.dumps({"taken": 3}), flush=True); '
-                             'time.sleep(60)'], stdout=subprocess.PIPE, text=True)
-    assert dds_cost._result(hang, 1.0) == ({'taken': 3}, True)
-    quiet = subprocess.Popen([sys.executable, '-c', 'pass'], stdout=subprocess.PIPE, text=True)
-    assert dds_cost._result(quiet, 10.0) == (None, False)
+    import time
+    mark = tmp_path / 'reported'
+    hang = subprocess.Popen([sys.executable, '-c', 'import json, pathlib, sys, time; '
+                             'print(json.dumps({"taken": 3}), flush=True); pathlib.Path(sys.argv[1]).touch(); '
+                             'time.sleep(60)', str(mark)], stdout=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 30.0
+    while not mark.exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert dds_cost._result(hang, 0.5) == ({'taken': 3}, True, '')
+    failed = subprocess.Popen([sys.executable, '-c', 'import sys; sys.exit("not acknowledged")'],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert dds_cost._result(failed, 10.0) == (None, False, 'not acknowledged\n')
 
 
 def test_a_failed_setting_is_run_again_and_its_failures_kept(monkeypatch):

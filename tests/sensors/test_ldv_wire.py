@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from alignment_core.samples import LdvSample
 from alignment_core.sensors import ldv_wire
@@ -90,6 +91,32 @@ def test_a_stream_decodes_to_the_bits_of_each_matrix_decomposed_alone():
     assert list(ldv_wire.transmitted_stream([], 7)) == []
 
 
+NOT_DECOMPOSABLE = [np.array([[0.0, 1e-9, 1.7e308], [1e-9, 0.0, 1e-300], [1.7e308, 1e-300, 0.0]]),
+                    np.array([[-1.0, 0.0, 1.7e308], [0.0, 0.0, 1e-9], [1.7e308, 1e-9, 0.0]]),
+                    np.array([[1.0, 0.0, 1.7e308], [0.0, 0.0, 0.0], [1.7e308, 0.0, 0.0]])]
+"""Finite covariances whose eigen-decomposition LAPACK does not converge on (numpy raises)."""
+
+
+@pytest.mark.filterwarnings('ignore:overflow encountered:RuntimeWarning')
+def test_a_covariance_that_cannot_be_decomposed_is_not_a_beam_and_stops_nothing():
+    """A message whose covariance LAPACK cannot decompose (cells near the end of the float range)
+    is read as no beam, alone or in a stack, and the stack's other samples decode as they do
+    alone (such a message once raised out of the filter node's callback)."""
+    for c in NOT_DECOMPOSABLE:
+        with pytest.raises(np.linalg.LinAlgError):
+            np.linalg.eigh(0.5 * (c + c.T))
+    u = np.array([0.6, -0.48, 0.64])
+    good = ldv_wire.encode(LdvSample(t_ns=0, v_s=u, sigma=0.02, valid=True, beam=u))[1]
+    covs = [good, *NOT_DECOMPOSABLE, good]
+    stack = ldv_wire.decode_all(list(range(len(covs))), np.tile(u, (len(covs), 1)), np.array(covs))
+    assert [s.beam is not None for s in stack] == [True, False, False, False, True]
+    assert [s.valid for s in stack] == [True, True, False, True, True]
+    alone = ldv_wire.decode(0, u, good)
+    for s in (stack[0], stack[-1]):
+        assert s.beam.tobytes() == alone.beam.tobytes() and s.sigma == alone.sigma
+
+
+@pytest.mark.filterwarnings('ignore:overflow encountered:RuntimeWarning')
 def test_one_message_decodes_to_the_bits_of_the_stack_whatever_its_covariance():
     """The filter node decodes each message alone (decode), the batch pipeline stacks them
     (decode_all): the same sample for any covariance a publisher may send (asymmetric, rank 2,
@@ -113,6 +140,7 @@ def test_one_message_decodes_to_the_bits_of_the_stack_whatever_its_covariance():
             c = np.outer(u, u) * (1.0 + 1e-12 * rng.normal(size=(3, 3)))   # a beam, perturbed
         covs.append(c)
     covs.append(np.zeros((3, 3)))
+    covs += NOT_DECOMPOSABLE + [np.diag([1e308, 1e308, 1e308]), np.full((3, 3), 1e308)]   # a trace beyond the range
     linear = rng.normal(size=(len(covs), 3))
     stack = ldv_wire.decode_all(list(range(len(covs))), linear, np.array(covs))
     for k, (v, c, want) in enumerate(zip(linear, covs, stack)):

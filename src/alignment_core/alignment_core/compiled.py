@@ -165,10 +165,11 @@ def activate() -> None:
         if _active:
             return
         import numba
+        from numba.core.compiler_lock import global_compiler_lock
         from numba.core.registry import cpu_target
         numba.config.CACHE_DIR = str(cache_dir())   # type: ignore[attr-defined]  # read when a dispatcher is made
-        cpu_target.typing_context.refresh()
-        cpu_target.target_context.refresh()
+        with global_compiler_lock:                  # as numba itself refreshes (its typing context too)
+            cpu_target.target_context.refresh()
         for call in _ON_NUMBA:
             call()
         for k in KERNELS:

@@ -48,39 +48,61 @@ def decode(t_ns: int, linear: np.ndarray, cov: np.ndarray) -> LdvSample:
         return LdvSample(t_ns=t_ns, v_s=v, sigma=math.nan, valid=False)
     trace = cells[0] + cells[4] + cells[8]
     if all(map(math.isfinite, cells)) and trace > 0.0:
-        w, vec = np.linalg.eigh(0.5 * (cov + cov.T))
-        if float(w[1]) <= BEAM_RANK_TOLERANCE * trace:
-            return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(trace), valid=True, beam=vec[:, 2].copy())
+        w1, beam = _eigh_one(0.5 * (cov + cov.T))
+        if w1 <= BEAM_RANK_TOLERANCE * trace:
+            return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(trace), valid=True, beam=beam)
     return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(c0), valid=True)
+
+
+def _eigh_one(a: np.ndarray) -> tuple[float, np.ndarray]:
+    """(the middle eigenvalue, the eigenvector of the largest (3,)) of a symmetric 3 x 3, or (NaN,
+    zeros) when LAPACK does not converge (cells near the end of the float range): NaN compares
+    false, so not a beam."""
+    try:
+        w, vec = np.linalg.eigh(a)
+    except np.linalg.LinAlgError:
+        return math.nan, np.zeros(3)
+    return float(w[1]), vec[:, 2].copy()
 
 
 def decode_all(t_ns: list[int], linear: np.ndarray, cov: np.ndarray) -> list[LdvSample]:
     """The LdvSamples of velocities (N, 3) and their linear covariances (N, 3, 3), the
-    covariances decomposed as one stack (eigh solves each matrix on its own: the same bits as
-    one by one)."""
+    covariances that could be a beam's (valid, finite, a positive trace) decomposed as one stack
+    (eigh solves each matrix on its own: the same bits as one by one; a stack with one that does
+    not converge, each on its own)."""
     c0 = cov[:, 0, 0]
     valid = c0 >= 0.0                                   # NaN: not valid
     trace = cov[:, 0, 0] + cov[:, 1, 1] + cov[:, 2, 2]
-    finite = np.isfinite(cov).all(axis=(1, 2))
-    if finite.all():                                    # the usual case: no masks
-        w, vec = np.linalg.eigh(0.5 * (cov + cov.transpose(0, 2, 1)))
-    else:
-        w, vec = np.zeros((len(cov), 3)), np.zeros((len(cov), 3, 3))
-        if finite.any():
-            w[finite], vec[finite] = np.linalg.eigh(0.5 * (cov[finite] + cov[finite].transpose(0, 2, 1)))
+    candidate = valid & np.isfinite(cov).all(axis=(1, 2)) & (trace > 0.0)
+    w1, beam = np.full(len(cov), math.nan), np.zeros((len(cov), 3))     # NaN: not a beam
+    if candidate.all():                                 # the usual case: no masks
+        w1, beam = _eigh_stack(0.5 * (cov + cov.transpose(0, 2, 1)))
+    elif candidate.any():
+        sub = cov[candidate]
+        w1[candidate], beam[candidate] = _eigh_stack(0.5 * (sub + sub.transpose(0, 2, 1)))
     out = []
     linear = np.array(linear, dtype=float)           # one copy; each sample's v_s a row of it
-    beam = np.ascontiguousarray(vec[:, :, 2])
-    rows = zip(t_ns, valid.tolist(), finite.tolist(), trace.tolist(), w[:, 1].tolist(), c0.tolist())
-    for i, (t, ok, fin, tr, w1, var) in enumerate(rows):
+    rows = zip(t_ns, valid.tolist(), trace.tolist(), w1.tolist(), c0.tolist())
+    for i, (t, ok, tr, w, var) in enumerate(rows):
         v = linear[i]
         if not ok:
             out.append(LdvSample(t_ns=t, v_s=v, sigma=math.nan, valid=False))
-        elif fin and tr > 0.0 and w1 <= BEAM_RANK_TOLERANCE * tr:
+        elif w <= BEAM_RANK_TOLERANCE * tr:
             out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(tr), valid=True, beam=beam[i]))
         else:
             out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(var), valid=True))
     return out
+
+
+def _eigh_stack(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(middle eigenvalues (N,), eigenvectors of the largest (N, 3)) of symmetric matrices (N, 3, 3),
+    `_eigh_one`'s (NaN, zeros) for one that does not converge."""
+    try:
+        w, vec = np.linalg.eigh(a)
+    except np.linalg.LinAlgError:
+        each = [_eigh_one(m) for m in a]
+        return np.array([w for w, _ in each]), np.array([b for _, b in each]).reshape(len(a), 3)
+    return np.ascontiguousarray(w[:, 1]), np.ascontiguousarray(vec[:, :, 2])
 
 
 def transmitted(s: LdvSample) -> LdvSample:
