@@ -78,3 +78,20 @@ def test_the_end_of_a_run_is_judged_on_stamped_topics_only(scenario):
     sc = core_scenario.resolve(core_scenario.given_data(scenario, {}, None))
     unstamped = [t for t in end_topics_of(sc) if not msg_definitions.has_stamp(TOPIC_TYPES[t])]
     assert unstamped == []
+
+
+def test_the_launcher_starts_its_nodes_without_use_sim_time(tmp_path, monkeypatch):
+    """The nodes never read ROS time (rclpy's /clock reader cost each node CPU on every ship
+    sample): neither a forked node's command line nor start_node.sh's sets use_sim_time."""
+    from alignment_ros import graph
+    (tmp_path / 'logs').mkdir()
+    run = run_with(tmp_path, {})
+    seen: dict[str, list[str]] = {}
+    monkeypatch.setattr(Run, 'fork', lambda self, name, entry, argv, log: seen.setdefault('fork', argv))
+    monkeypatch.setattr(Run, 'spawn', lambda self, name, cmd, **kw: seen.setdefault('spawn', cmd))
+    for fork in (True, False):
+        graph.start(run, 'master_ins_node', tmp_path / 'params.yaml', fork=fork)
+    assert set(seen) == {'fork', 'spawn'}
+    assert not any('use_sim_time' in a for argv in seen.values() for a in argv)
+    script = (graph.root() / 'scripts' / 'start_node.sh').read_text()
+    assert 'use_sim_time' not in script.split('\nset -euo pipefail')[1]       # its commands, not its comments
