@@ -73,6 +73,12 @@ def test_kernels_are_compiled_without_fast_math_and_with_pythons_error_model():
         raise AssertionError('no ZeroDivisionError')
 
 
+def _printed(code: str) -> list[str]:
+    """The words a fresh Python process running `code` prints."""
+    return subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True,
+                          env=dict(os.environ)).stdout.split()
+
+
 def test_numba_is_imported_on_the_first_kernel_call_and_the_kernels_become_dispatchers():
     """Importing the engine (what the graph's launcher and every node do) imports no numba; the
     first call makes every kernel a dispatcher and rebinds the names, also in other modules."""
@@ -84,9 +90,7 @@ def test_numba_is_imported_on_the_first_kernel_call_and_the_kernels_become_dispa
             'import numpy as np\n'
             'k.predict(np.zeros(3), np.eye(3), np.eye(3), np.eye(3))\n'
             'print(*before, "numba" in sys.modules, type(k.update).__name__, type(s.quat_mul_k).__name__)\n')
-    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True,
-                         env=dict(os.environ)).stdout.split()
-    assert out == ['False', 'Kernel', 'Kernel', 'True', 'CPUDispatcher', 'CPUDispatcher']
+    assert _printed(code) == ['False', 'Kernel', 'Kernel', 'True', 'CPUDispatcher', 'CPUDispatcher']
 
 
 def test_a_process_forked_after_activating_finds_numba_s_registries_loaded():
@@ -110,9 +114,7 @@ def test_a_process_forked_after_activating_finds_numba_s_registries_loaded():
             '    sys.stdout.flush()\n'
             '    os._exit(0)\n'
             'os.waitpid(pid, 0)\n')
-    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True,
-                         env=dict(os.environ)).stdout.split()
-    assert out == ['False', '0', 'True', 'True', '2.0']       # and its kernels run: P = I I I + I
+    assert _printed(code) == ['False', '0', 'True', 'True', '2.0']       # and its kernels run: P = I I I + I
 
 
 def test_compiled_and_interpreted_agree_on_a_kernel_with_blas():
