@@ -148,3 +148,25 @@ def test_every_node_package_has_the_entry_point_the_launcher_forks_into():
     for setup in sorted(ROOT.glob('src/*_node/setup.py')):
         name = setup.parent.name
         assert f"'{name} = {name}.node:main'" in setup.read_text(), setup
+
+
+def test_the_launcher_is_collected_once_for_all_its_forks(tmp_path):
+    out = run_script(tmp_path, '''
+        import gc
+        gc.disable()                                   # no automatic collection between the counts
+
+        def full():
+            return gc.get_stats()[2]['collections']
+
+        before = full()
+        with open('node.log', 'w') as log:
+            children = [forked.fork_node(lambda: 0, ['/ws/lib/demo_node/demo_node'], log, (), lambda: None)
+                        for _ in range(3)]
+        frozen = gc.get_freeze_count()
+        forked.thaw_launcher()
+        print(json.dumps({'collections': full() - before, 'frozen': frozen, 'thawed': gc.get_freeze_count(),
+                          'rc': [p.wait(30) for p in children]}))
+        ''')
+    assert out['rc'] == [0, 0, 0]
+    assert out['collections'] == 1                 # the first fork's, not one per fork
+    assert out['frozen'] > 0 and out['thawed'] == 0

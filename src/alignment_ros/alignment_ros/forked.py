@@ -91,6 +91,22 @@ class ForkedProcess:
         return self.returncode
 
 
+def freeze_launcher() -> None:
+    """The launcher's objects frozen before a fork: never collected (nor finalized) in the child.
+    They are collected before the first fork only, and stay frozen for the next (a collection
+    of a launcher that has imported the nodes' code takes ~60 ms, each fork's had been on the
+    last node's start-up) until :func:`thaw_launcher`; what a later fork adds is frozen with
+    them."""
+    if not gc.get_freeze_count():
+        gc.collect()
+    gc.freeze()
+
+
+def thaw_launcher() -> None:
+    """After the last fork: the launcher's objects collected as any others again."""
+    gc.unfreeze()
+
+
 def fork_node(entry: Callable[[], object], argv: list[str], log: IO, keep_fds: Iterable[int],
               in_child: Callable[[], None]) -> ForkedProcess:
     """Fork a child that runs `entry` as the console script would with command line `argv`
@@ -101,8 +117,7 @@ def fork_node(entry: Callable[[], object], argv: list[str], log: IO, keep_fds: I
         raise RuntimeError(f'cannot fork a node: {reason}')
     for stream in (sys.stdout, sys.stderr):
         stream.flush()
-    gc.collect()
-    gc.freeze()      # the launcher's objects: never collected (nor finalized) in the child
+    freeze_launcher()
     lttng = _lttng()
     signals = ctypes.create_string_buffer(SIGSET_BYTES)
     if lttng is not None:
@@ -111,7 +126,6 @@ def fork_node(entry: Callable[[], object], argv: list[str], log: IO, keep_fds: I
     if pid:
         if lttng is not None:
             lttng.ust_after_fork_parent(signals)
-        gc.unfreeze()
         return ForkedProcess(pid, argv)
     code = 1
     try:

@@ -33,6 +33,7 @@ import yaml
 
 from alignment_core import compiled
 from alignment_core.config import scenario as core_scenario
+from alignment_core.ship import motion
 from alignment_core.validation import ConfigError
 
 from . import forked, summary, topics
@@ -87,7 +88,7 @@ AIR_DATA_TOPICS = (*topics.FADS_PORT_TOPICS, topics.AIR_DATA_VELOCITY, topics.AI
 
 
 def nodes_of(sc: core_scenario.Scenario) -> tuple[str, ...]:
-    """The nodes of a scenario's run (consumers before producers; the ship node last)."""
+    """The nodes of a scenario's run but the ship (started apart, first), consumers before producers."""
     if not sc.fads.enabled:
         return NODES
     return ('air_data_filter_node', 'alignment_filter_node', 'ldv_node', 'air_data_node', 'slave_ins_node',
@@ -273,18 +274,26 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
         unsafe = forked.unsafe_reason()
         fork = unsafe is None
         run.node_start = 'fork' if fork else f'start_node.sh ({unsafe})'
-        if fork:
-            for n in (*nodes_of(sc), 'ship_motion_node'):
-                forked.entry_point(n)      # every node's imports once, before the first fork
-            compiled.activate()            # numba too: the slave and the filter run kernels
-        else:
+        if not fork:
             print(f'run_graph: nodes started through scripts/start_node.sh: {unsafe}', file=sys.stderr)
-        for n in nodes_of(sc):
-            start(run, n, params, matched=matched, fork=fork)
+        # the ship first, once its own code is imported (its sea's model too): the first message
+        # waits for its start-up, which the other nodes' imports and start-up overlap; it publishes
+        # nothing before every reader it waits for has matched. It runs no compiled kernel.
+        if fork:
+            forked.entry_point('ship_motion_node')
+            motion.model_class(sc.ship)
         start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',
               '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']),
               '-p', 'pace_topics:=[' + ','.join(f'"{t}"' for t in pace_topics_of(sc)) + ']',
               '-p', f'max_lead_s:={max_lead_of(sc)}', fork=fork)
+        if fork:
+            for n in nodes_of(sc):
+                forked.entry_point(n)      # every other node's imports once, before their forks
+            compiled.activate()            # numba too: the slave and the filter run kernels
+        for n in nodes_of(sc):
+            start(run, n, params, matched=matched, fork=fork)
+        if fork:
+            forked.thaw_launcher()
         wait_ready(run, rec)
         end_reached = watch_end_time(rec, live.recorded)
         live.start()
