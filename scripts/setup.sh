@@ -7,17 +7,18 @@ cd "$ROOT"
 VENV="$ROOT/.venv"
 STAMP="$VENV/.requirements.sha"
 
-PY="${PYTHON:-}"
-if [ -z "$PY" ]; then
-  for c in python3.11 python3; do
-    if command -v "$c" >/dev/null 2>&1 && "$c" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
-      PY="$c"; break
-    fi
-  done
-fi
-[ -n "$PY" ] || { echo "setup.sh: Python 3.11 is required (ROS 2 Jazzy wheels are built for it)" >&2; exit 1; }
-
+# the interpreter is looked for only to make the venv (a pyenv shim alone takes ~0.1 s, on every
+# script's start)
 if [ ! -x "$VENV/bin/python" ]; then
+  PY="${PYTHON:-}"
+  if [ -z "$PY" ]; then
+    for c in python3.11 python3; do
+      if command -v "$c" >/dev/null 2>&1 && "$c" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
+        PY="$c"; break
+      fi
+    done
+  fi
+  [ -n "$PY" ] || { echo "setup.sh: Python 3.11 is required (ROS 2 Jazzy wheels are built for it)" >&2; exit 1; }
   echo "setup.sh: creating $VENV"
   "$PY" -m venv "$VENV"
 fi
