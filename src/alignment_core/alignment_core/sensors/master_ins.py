@@ -35,6 +35,7 @@ transport jitter `latency_jitter_s`, uniform per sample, stream 'master_ins_jitt
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -317,6 +318,16 @@ class MasterInsStage:
     def step(self, s: ShipSample) -> list[MasterOutput]:
         new = self._outputs(ShipBatch.of([s])) if self.timing.due(s.t_ns) else []
         return self.timing.release(s.t_ns, new)
+
+    def step_many(self, ships: Sequence[ShipSample]) -> list[MasterOutput]:
+        """`step` on each of K ship samples in turn, as one batched call: the same outputs, bit for
+        bit, and the same state afterwards (noise and jitter streams, the Schuler error state,
+        pending releases); what `step` releases on the way comes out at the last sample's time."""
+        if not ships:
+            return []
+        due = [s for s in ships if self.timing.due(s.t_ns)]
+        new = self._outputs(ShipBatch.of(due)) if due else []
+        return self.timing.release(ships[-1].t_ns, new)
 
     def run_batch(self, sb: ShipBatch) -> list[MasterOutput]:
         idx = np.flatnonzero(self.timing.due_mask(sb.t_ns))
