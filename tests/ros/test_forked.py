@@ -170,3 +170,21 @@ def test_the_launcher_is_collected_once_for_all_its_forks(tmp_path):
     assert out['rc'] == [0, 0, 0]
     assert out['collections'] == 1                 # the first fork's, not one per fork
     assert out['frozen'] > 0 and out['thawed'] == 0
+
+
+def test_a_child_inherits_the_launchers_table_of_module_files(tmp_path):
+    out = run_script(tmp_path, '''
+        import inspect
+
+        def entry():
+            print(json.dumps({'child': os.path.realpath(json.__file__) in inspect.modulesbyfile}))
+            return 0
+
+        before = os.path.realpath(json.__file__) in inspect.modulesbyfile     # nothing looked it up yet
+        with open('node.log', 'w') as log:
+            rc = forked.fork_node(entry, ['/ws/lib/demo_node/demo_node'], log, (), lambda: None).wait(30)
+        print(json.dumps({'before': before, 'rc': rc}))
+        ''')
+    child = json.loads((tmp_path / 'node.log').read_text().strip().splitlines()[-1])
+    assert out == {'before': False, 'rc': 0}
+    assert child['child']          # its first log line does not walk every module again
