@@ -82,7 +82,9 @@ def rows(r: dict[str, Any]) -> list[tuple[str, str, str, str]]:
         if two is None:
             out.append((goal, target, NOT_MEASURED, NOT_MEASURED))
             continue
-        got = f"{shown(two['runs_per_min'], 1, True)} runs/min on 2 workers ({two['cpu_s_per_run']:.1f} CPU s per run)"
+        runs = r.get('stamp', {}).get('settings', {}).get('runs')
+        got = (f"{shown(two['runs_per_min'], 1, True)} runs/min on 2 workers ("
+               + (f'{runs} runs, ' if runs else '') + f"{two['cpu_s_per_run']:.1f} CPU s per run)")
         if one is not None:
             got += f", {one['runs_per_min']:.1f} on 1"
         out.append((goal, target, got, _met(two['runs_per_min'] >= MC_RUNS_PER_MIN)))

@@ -145,3 +145,8 @@ def test_the_transport_line_says_when_its_benchmark_ran_a_setting_again():
     dds['failures'], dds['stopped_after_report'] = ['2 readers: 1 of 2 subscribers reported nothing'], 1
     assert line().endswith('In that benchmark 1 setting(s) failed and ran again (2 readers: 1 of 2 subscribers '
                            'reported nothing), and 1 process(es) hung after reporting and were stopped.')
+
+
+def test_the_monte_carlo_line_says_how_many_runs_it_timed():
+    text = speed_table.render(run())
+    assert '100.0 runs/min on 2 workers (4 runs, 1.2 CPU s per run)' in text
