@@ -150,7 +150,7 @@ def test_every_node_package_has_the_entry_point_the_launcher_forks_into():
         assert f"'{name} = {name}.node:main'" in setup.read_text(), setup
 
 
-def test_the_launcher_is_collected_once_for_all_its_forks(tmp_path):
+def test_the_launcher_is_collected_once_and_frozen_at_every_fork(tmp_path):
     out = run_script(tmp_path, '''
         import gc
         gc.disable()                                   # no automatic collection between the counts
@@ -159,17 +159,21 @@ def test_the_launcher_is_collected_once_for_all_its_forks(tmp_path):
             return gc.get_stats()[2]['collections']
 
         before = full()
+        frozen, children, kept = [], [], []
         with open('node.log', 'w') as log:
-            children = [forked.fork_node(lambda: 0, ['/ws/lib/demo_node/demo_node'], log, (), lambda: None)
-                        for _ in range(3)]
-        frozen = gc.get_freeze_count()
+            for _ in range(3):
+                kept.append([[i] for i in range(1000)])     # lists (tracked): made since the last fork
+                children.append(forked.fork_node(lambda: 0, ['/ws/lib/demo_node/demo_node'], log, (), lambda: None))
+                frozen.append(gc.get_freeze_count())
         forked.thaw_launcher()
         print(json.dumps({'collections': full() - before, 'frozen': frozen, 'thawed': gc.get_freeze_count(),
                           'rc': [p.wait(30) for p in children]}))
         ''')
     assert out['rc'] == [0, 0, 0]
     assert out['collections'] == 1                 # the first fork's, not one per fork
-    assert out['frozen'] > 0 and out['thawed'] == 0
+    f = out['frozen']
+    assert 0 < f[0] and f[0] + 1000 <= f[1] and f[1] + 1000 <= f[2]      # each fork freezes what came since
+    assert out['thawed'] == 0
 
 
 def test_a_child_inherits_the_launchers_table_of_module_files(tmp_path):
@@ -177,14 +181,21 @@ def test_a_child_inherits_the_launchers_table_of_module_files(tmp_path):
         import inspect
 
         def entry():
-            print(json.dumps({'child': os.path.realpath(json.__file__) in inspect.modulesbyfile}))
+            import colorsys
+            print(json.dumps({'json': os.path.realpath(json.__file__) in inspect.modulesbyfile,
+                              'colorsys': os.path.realpath(colorsys.__file__) in inspect.modulesbyfile}))
             return 0
 
         before = os.path.realpath(json.__file__) in inspect.modulesbyfile     # nothing looked it up yet
-        with open('node.log', 'w') as log:
-            rc = forked.fork_node(entry, ['/ws/lib/demo_node/demo_node'], log, (), lambda: None).wait(30)
+        with open('first.log', 'w') as log:
+            rc = [forked.fork_node(entry, ['/ws/lib/demo_node/demo_node'], log, (), lambda: None).wait(30)]
+        import colorsys                                 # imported after the first fork, before the second
+        with open('second.log', 'w') as log:
+            rc.append(forked.fork_node(entry, ['/ws/lib/demo_node/demo_node'], log, (), lambda: None).wait(30))
         print(json.dumps({'before': before, 'rc': rc}))
         ''')
-    child = json.loads((tmp_path / 'node.log').read_text().strip().splitlines()[-1])
-    assert out == {'before': False, 'rc': 0}
-    assert child['child']          # its first log line does not walk every module again
+    first, second = (json.loads((tmp_path / f).read_text().strip().splitlines()[-1])
+                     for f in ('first.log', 'second.log'))
+    assert out == {'before': False, 'rc': [0, 0]}
+    assert first == {'json': True, 'colorsys': False}
+    assert second == {'json': True, 'colorsys': True}    # a log line in either walks no module again

@@ -16,8 +16,10 @@ from alignment_core.sensors.master_ins import MasterInsStage, MasterOutput
 from alignment_core.units import DEG
 
 CASES = {
-    'catapult: constant errors, the scenario rate': ('catapult', {'duration_s': 3.0}),
-    'deck: own rate and latency': ('deck', {'duration_s': 3.0}),
+    'constant errors at the scenario rate, no latency': (
+        'catapult', {'duration_s': 3.0, 'master.model': 'constant', 'master.rate_hz': 0.0, 'master.latency_s': 0.0,
+                     'master.latency_jitter_s': 0.0}),
+    'deck: its own master (rate, latency, jitter)': ('deck', {'duration_s': 3.0}),
     'schuler, noise, latency and jitter, own rate': (
         'catapult', {'duration_s': 4.0, 'master.model': 'schuler', 'master.arw_dpsh': 0.01, 'master.vrw_ugpshz': 5.0,
                      'master.rate_hz': 50.0, 'master.latency_s': 0.03, 'master.latency_jitter_s': 0.015}),

@@ -92,12 +92,19 @@ class ForkedProcess:
         return self.returncode
 
 
+MODULE_TABLE_PROBE = '<module table probe>'
+"""A file name no module has (inspect.getmodule's `_filename`): looking it up walks sys.modules."""
+
+
 def fill_module_table() -> None:
     """inspect's table of the imported modules' files, filled before a fork for the child to
     inherit: rclpy's logger looks its caller up through inspect at every call, and the first
     lookup in a process walks every module imported (~50 ms of CPU with the nodes' imports, in
-    each node at its first log line: the ship's is on the way to the run's first message)."""
-    inspect.getframeinfo(sys._getframe())
+    each node at its first log line: the ship's is on the way to the run's first message). A
+    lookup of a file the table lacks makes inspect add every module imported since its last walk
+    (one of a file it has returns at once, and a child would lack what was imported after the
+    first fork)."""
+    inspect.getmodule(None, _filename=MODULE_TABLE_PROBE)
 
 
 def freeze_launcher() -> None:
