@@ -106,6 +106,22 @@ def test_appended_constants_propagate_as_the_identity_however_nested():
     assert np.array_equal(phi[15:, 15:], np.eye(4)) and not phi[15:, :15].any() and not phi[:15, 15:].any()
 
 
+def test_appended_constants_on_a_base_without_a_compiled_transition():
+    """The same for a base whose Phi is I + F h + (F h)^2 / 2 of its own F (seed003's velocity and
+    attitude model): ErrorModel.transition_in places it in the identity."""
+    from alignment_core.estimation.models import Propagation
+    from alignment_core.estimation.models.lever_arm import LeverArmStates
+    base = Seed003VelocityAttitude(FilterConfig(model='seed003_24'), True)
+    model = LeverArmStates(MasterDelayState(base, 0.02), 1.0)
+    p = Propagation(C_M, np.array([0.2, -0.1, 9.8]), W_IN, np.array([1e-6, 2e-6, 0.0]), np.array([0.1, 5.0, 0.0]),
+                    0.7, 10.0, H)
+    nb = base.n
+    phi = model.transition(p)
+    assert phi.shape == (nb + 4, nb + 4)
+    assert np.array_equal(phi[:nb, :nb], base.transition(p))
+    assert np.array_equal(phi[nb:, nb:], np.eye(4)) and not phi[nb:, :nb].any() and not phi[:nb, nb:].any()
+
+
 def test_yaw_matching_keeps_the_velocity_rows_and_the_heading_row():
     cfg = FilterConfig(model='seed003_24')
     full = Seed003VelocityAttitude(cfg, True)

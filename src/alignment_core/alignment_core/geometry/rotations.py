@@ -46,6 +46,9 @@ def rows_matmul(x: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 def skew(v) -> np.ndarray:
     """Cross-product matrices [v x]: (..., 3) -> (..., 3, 3)."""
+    if type(v) is np.ndarray and v.shape == (3,) and v.dtype.char == 'd':
+        x, y, z = v.tolist()                # one vector: its matrix from Python floats (~4x faster)
+        return np.array(((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0)))
     v = np.asarray(v, dtype=float)
     k = np.zeros(v.shape[:-1] + (3, 3))
     k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]

@@ -144,6 +144,16 @@ class ErrorModel:
         fh = self.continuous(p) * p.h
         return np.eye(self.n) + fh + 0.5 * (fh @ fh)
 
+    def transition_in(self, p: Propagation, n: int) -> np.ndarray:
+        """Phi in the top-left of an (n, n) identity, n >= self.n (the rows of states appended
+        to this model: random constants)."""
+        phi = self.transition(p)
+        if n == self.n:
+            return phi
+        out = np.eye(n)
+        out[:self.n, :self.n] = phi
+        return out
+
     def process_noise(self, h: float) -> np.ndarray:
         """Qd (n, n) over an interval h."""
         raise NotImplementedError
@@ -256,15 +266,12 @@ class AugmentedModel(ModelWrapper):
         return self._grow(self.base.continuous(p), 0.0)
 
     def transition(self, p: Propagation) -> np.ndarray:
-        return self._transition_of_size(p, self.n)
+        return self.base.transition_in(p, self.n)
 
-    def _transition_of_size(self, p: Propagation, n: int) -> np.ndarray:
-        """Phi (n, n): the innermost non-augmented model's Phi with identity rows for every state
-        appended above it, grown once however many augmentations are nested (lever arm on delay)."""
-        base = self.base
-        if isinstance(base, AugmentedModel):
-            return base._transition_of_size(p, n)
-        return self._grow(base.transition(p), 1.0, n)
+    def transition_in(self, p: Propagation, n: int) -> np.ndarray:
+        """The innermost non-augmented model's Phi with identity rows for every state appended
+        above it, grown once however many augmentations are nested (lever arm on delay)."""
+        return self.base.transition_in(p, n)
 
     def process_noise(self, h: float) -> np.ndarray:
         qd = self._qd.get(h)

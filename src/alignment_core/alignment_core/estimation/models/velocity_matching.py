@@ -108,19 +108,22 @@ _FH_INDEX: dict[int, np.ndarray] = {}
 
 
 def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray,
-               h: float, n: int = N) -> np.ndarray:
+               h: float, n: int = N, size: int | None = None) -> np.ndarray:
     """Phi (n, n) over an interval h, from the mean attitude, specific force and rates: the
-    compiled _transition (its numbers are those of `continuous(...) * h` written block by block)."""
+    compiled _transition (its numbers are those of `continuous(...) * h` written block by block);
+    size > n: in the top-left of a (size, size) identity (states appended to the model)."""
     idx = _FH_INDEX.get(n)
     if idx is None:
         idx = _FH_INDEX[n] = _fh_index(n)
-    return _transition(as_float64(c_nb), as_float64(f_n), as_float64(w_ie), as_float64(w_en), float(h), idx, n)
+    return _transition(as_float64(c_nb), as_float64(f_n), as_float64(w_ie), as_float64(w_en), float(h), idx, n,
+                       n if size is None else size)
 
 
 @kernel
-def _transition(c_nb, f_n, w_ie, w_en, h, idx, n):
+def _transition(c_nb, f_n, w_ie, w_en, h, idx, n, size):
     """I + F h + (F h)^2 / 2 with F h's 36 non-zero entries (in _fh_index's order) in float
-    arithmetic; c_nb (3, 3), f_n, w_ie, w_en (3,), idx (36,) flat cell indices."""
+    arithmetic, in the top-left of a (size, size) identity; c_nb (3, 3), f_n, w_ie, w_en (3,),
+    idx (36,) flat cell indices of an (n, n) array."""
     c = (c_nb[0, 0], c_nb[0, 1], c_nb[0, 2], c_nb[1, 0], c_nb[1, 1], c_nb[1, 2], c_nb[2, 0], c_nb[2, 1], c_nb[2, 2])
     mh = -h
     ax, ay, az = mh * (w_ie[0] + w_en[0]), mh * (w_ie[1] + w_en[1]), mh * (w_ie[2] + w_en[2])
@@ -142,7 +145,11 @@ def _transition(c_nb, f_n, w_ie, w_en, h, idx, n):
     half *= 0.5
     phi = np.eye(n) + fh
     phi += half
-    return phi
+    if size == n:
+        return phi
+    out = np.eye(size)
+    out[:n, :n] = phi
+    return out
 
 
 def process_noise(q: NoiseDensities, h: float, n: int = N) -> np.ndarray:
@@ -210,6 +217,9 @@ class VelocityMatching(ErrorModel):
 
     def transition(self, p: Propagation) -> np.ndarray:
         return transition(p.c_nb, p.f_n, p.w_ie, p.w_en, p.h, self._n)
+
+    def transition_in(self, p: Propagation, n: int) -> np.ndarray:
+        return transition(p.c_nb, p.f_n, p.w_ie, p.w_en, p.h, self._n, n)
 
     def process_noise(self, h: float) -> np.ndarray:
         qd = self._qd.get(h)
