@@ -166,10 +166,29 @@ class ErrorModel:
         """z, H (or hfun), R at a matching instant (corr: the current corrections)."""
         raise NotImplementedError
 
+    def measurement_in(self, m: Match, corr: Corrections, n: int) -> Measurement:
+        """The measurement with H widened to n >= self.n columns (zero columns for the states
+        appended to this model); a linear measurement."""
+        meas = self.measurement(m, corr)
+        if n == self.n:
+            return meas
+        h = meas.matrix()
+        hh = np.zeros((h.shape[0], n))
+        hh[:, :self.n] = h
+        return Measurement(meas.z, hh, meas.r)
+
     def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         """Apply the estimate x (covariance p) to the strapdown and the corrections; return the
         residual state the filter keeps (zeros for what was fed back)."""
         raise NotImplementedError
+
+    def feedback_in(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        """feedback() of this model's states, the first self.n of a longer state x (covariance p):
+        the whole state kept, the appended states as they are."""
+        n = self.n
+        if len(x) == n:
+            return self.feedback(x, p, m, nav, corr)
+        return np.concatenate([self.feedback(x[:n], p[:n, :n], m, nav, corr), x[n:]])
 
     def misalignment(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState,
                      corr: Corrections) -> tuple[np.ndarray, np.ndarray]:
@@ -279,13 +298,22 @@ class AugmentedModel(ModelWrapper):
             qd = self._qd[h] = self._grow(self.base.process_noise(h), 0.0)
         return qd
 
-    def base_measurement(self, m: Match, corr: Corrections) -> Measurement:
-        """The base's measurement with H widened by zero columns for the appended states."""
-        meas = self.base.measurement(m, corr)
-        h = meas.matrix()
-        hh = np.zeros((h.shape[0], self.n))
-        hh[:, :self.nb] = h
-        return Measurement(meas.z, hh, meas.r)
+    def measurement(self, m: Match, corr: Corrections) -> Measurement:
+        return self.measurement_in(m, corr, self.n)
+
+    def measurement_in(self, m: Match, corr: Corrections, n: int) -> Measurement:
+        """The base's measurement, H widened once to n columns, this model's columns filled
+        (`fill_columns`), however many augmentations are nested."""
+        meas = self.base.measurement_in(m, corr, n)
+        self.fill_columns(meas.matrix(), m)
+        return meas
+
+    def fill_columns(self, h: np.ndarray, m: Match) -> None:
+        """Write this model's columns of H (rows x n; the appended states from column nb)."""
+        raise NotImplementedError
+
+    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        return self.feedback_in(x, p, m, nav, corr)
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
         return self.base.misalignment(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

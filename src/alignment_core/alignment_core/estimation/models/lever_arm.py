@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from alignment_core.estimation.models.base import AugmentedModel, Corrections, ErrorModel, Match, Measurement
+from alignment_core.estimation.models.base import AugmentedModel, Corrections, ErrorModel, Match
 from alignment_core.geometry.rotations import skew
 from alignment_core.navigation.strapdown import NavState
 
@@ -24,15 +24,15 @@ class LeverArmStates(AugmentedModel):
     def __init__(self, base: ErrorModel, sigma_m: float) -> None:
         super().__init__(base, '+lever_arm', ('dr_x', 'dr_y', 'dr_z'), sigma_m)
 
-    def measurement(self, m: Match, corr: Corrections) -> Measurement:
-        meas = self.base_measurement(m, corr)
-        hh = meas.matrix()
+    def fill_columns(self, h: np.ndarray, m: Match) -> None:
         cw = m.c_m @ skew(m.w_m)
+        nb = self.nb
         for row, axis in enumerate(self.velocity_rows):
-            hh[row, self.nb:] = cw[axis]
-        return meas
+            h[row, nb:nb + 3] = cw[axis]
 
-    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
-        xb = self.base.feedback(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)
-        corr.dr = corr.dr + x[self.nb:]
-        return np.concatenate([xb, np.zeros(3)])
+    def feedback_in(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        nb = self.nb
+        x_new = self.base.feedback_in(x, p, m, nav, corr)
+        corr.dr = corr.dr + x[nb:nb + 3]
+        x_new[nb:nb + 3] = 0.0
+        return x_new

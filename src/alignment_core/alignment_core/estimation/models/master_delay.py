@@ -28,7 +28,6 @@ from alignment_core.estimation.models.base import (
     Corrections,
     ErrorModel,
     Match,
-    Measurement,
 )
 from alignment_core.estimation.models.rate_matching import mid_interval_attitude
 from alignment_core.geometry.rotations import rotvec_to_dcm
@@ -53,14 +52,11 @@ class MasterDelayState(AugmentedModel):
             col[nv + na:nv + na + 3] = mid_interval_attitude(m, m.rate).T @ m.rate.w_dot_n
         return col
 
-    def measurement(self, m: Match, corr: Corrections) -> Measurement:
-        meas = self.base_measurement(m, corr)
-        meas.matrix()[:, self.nb] = self.column(m, len(meas.z))
-        return meas
+    def fill_columns(self, h: np.ndarray, m: Match) -> None:
+        h[:, self.nb] = self.column(m, h.shape[0])
 
-    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
-        xb = self.base.feedback(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)
-        return np.concatenate([xb, x[self.nb:]])
+    def feedback_in(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        return self.base.feedback_in(x, p, m, nav, corr)      # dt is kept, not fed back
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
         """The base model's, against the master attitude brought forward by the estimated delay,

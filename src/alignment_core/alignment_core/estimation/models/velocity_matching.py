@@ -73,8 +73,9 @@ _H_INDEX: dict[int, np.ndarray] = {}
 
 
 def measurement(u_n: np.ndarray, n: int = N) -> np.ndarray:
-    """H (3, n); for n = 15 the master-attitude block is -[u x] with u the rotated lever-arm
-    plus LDV velocity (nav frame). Written with one put(): the cells of skew_values(-u)."""
+    """H (3, n); for n >= 15 the master-attitude block (columns 12-14) is -[u x] with u the
+    rotated lever-arm plus LDV velocity (nav frame), the columns after it zero (states appended to
+    vm15). Written with one put(): the cells of skew_values(-u)."""
     if n == N:
         return H
     idx = _H_INDEX.get(n)
@@ -230,12 +231,21 @@ class VelocityMatching(ErrorModel):
     def measurement(self, m: Match, corr: Corrections) -> Measurement:
         return Measurement(m.z_vel, measurement(m.u_n, self._n), m.r_vel)
 
+    def measurement_in(self, m: Match, corr: Corrections, n: int) -> Measurement:
+        if self._n == N or n == self._n:               # vm12's H is a constant: widened by the base class
+            return super().measurement_in(m, corr, n)
+        return Measurement(m.z_vel, measurement(m.u_n, n), m.r_vel)    # vm15's cells, n columns
+
     def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         """C <- (I + [phi x]) C (exactly: exp([phi x]) C), V <- V - dV, biases accumulate;
         the master's attitude error is not fed back (it is the master's)."""
         nav.q_nb, nav.v_n, corr.bg, corr.ba, x_new = _feedback(
             as_float64(nav.q_nb), as_float64(nav.v_n), as_float64(corr.bg), as_float64(corr.ba), as_float64(x))
         return x_new
+
+    def feedback_in(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        """feedback() as it is: it keeps every state from the 13th on, the appended ones too."""
+        return self.feedback(x, p, m, nav, corr)
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
         """log((C_m c_nom)^T C_a) with, for vm15, C_m corrected by phi_m (C_m = (I + [phi_m x]) C_m,est)
