@@ -3,6 +3,8 @@ results files, reports that render, and numbers that make physical sense."""
 import dataclasses
 import math
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -156,3 +158,33 @@ def test_unknown_experiment_is_a_clear_error(capsys):
     with pytest.raises(SystemExit):
         main(['no_such_experiment'])
     assert 'unknown experiment' in capsys.readouterr().err
+
+
+def test_a_forked_pool_inherits_a_frozen_heap_and_numba_and_the_heap_is_thawed_after():
+    """forking_pool: workers forked inside it find numba imported and the heap they inherit frozen
+    (their collections skip it); the parent's heap is thawed after, and a heap someone else froze
+    is left frozen."""
+    import gc
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    fresh = subprocess.run([sys.executable, '-c', (
+        'import sys\n'
+        'from alignment_experiments import monte_carlo\n'
+        'before = "numba" in sys.modules\n'
+        'with monte_carlo.forking_pool():\n'
+        '    print(before, "numba" in sys.modules)\n')], capture_output=True, text=True, check=True)
+    assert fresh.stdout.split() == ['False', 'True']        # numba imported by the context, not before
+    assert gc.get_freeze_count() == 0
+    with monte_carlo.forking_pool():
+        assert gc.get_freeze_count() > 0
+        with ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context('fork')) as ex:
+            inherited = ex.submit(gc.get_freeze_count).result()
+    assert inherited > 0 and gc.get_freeze_count() == 0
+    gc.freeze()
+    try:
+        frozen = gc.get_freeze_count()
+        with monte_carlo.forking_pool():
+            pass
+        assert gc.get_freeze_count() == frozen
+    finally:
+        gc.unfreeze()
