@@ -184,7 +184,8 @@ class ErrorModel:
 
     def feedback_in(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         """feedback() of this model's states, the first self.n of a longer state x (covariance p):
-        the whole state kept, the appended states as they are."""
+        the whole state kept, the appended states as they are, in a new array (the layers that
+        appended states write into it)."""
         n = self.n
         if len(x) == n:
             return self.feedback(x, p, m, nav, corr)
