@@ -186,17 +186,16 @@ def make_executor(workers: int, scheduler: str | None = None) -> Executor | None
 
 @contextmanager
 def forking_pool() -> Iterator[None]:
-    """Around the submissions to a pool of forked workers: numba imported here once (each worker
-    would import it: ~0.4 CPU s) and this process's heap collected and frozen, so a worker's
-    collections never walk what it inherits (walking it writes to every inherited page, which the
-    kernel then copies); thawed after. Left alone if something else froze the heap."""
+    """Around the submissions to a pool of forked workers: numba imported once here, not in each
+    worker, and the heap frozen (unless someone else froze it), so that no worker's collection
+    walks, and so copies, the pages it inherits; thawed after."""
     compiled.activate()
     if gc.get_freeze_count():
         yield
         return
     gc.collect()
-    gc.freeze()
     try:
+        gc.freeze()
         yield
     finally:
         gc.unfreeze()

@@ -122,16 +122,28 @@ def test_appended_constants_on_a_base_without_a_compiled_transition():
     assert np.array_equal(phi[nb:, nb:], np.eye(4)) and not phi[nb:, :nb].any() and not phi[:nb, nb:].any()
 
 
-@pytest.mark.parametrize('base_name', ['vm15', 'seed003_24'])
-def test_the_deck_stack_measures_and_feeds_back_as_its_layers(base_name):
-    """The lever arm on the master delay on a base (the deck's stack): H is the base's H, then the
-    delay's column (the spot acceleration on the velocity rows), then the lever arm's columns
-    (C_m [w_m x]: the velocity change of a longer arm); feedback is the base's on its states, the
-    delay kept, the lever arm's error moved into the corrections and zeroed."""
+def _stack(base_name: str, layers: str):
+    """base (vm15, vm12, seed003_24) under the layers, innermost first ('d' delay, 'l' lever arm)."""
     from alignment_core.estimation.models.lever_arm import LeverArmStates
     cfg = FilterConfig(model=base_name)
-    base = VelocityMatching(cfg, True) if base_name == 'vm15' else Seed003VelocityAttitude(cfg, True)
-    model = LeverArmStates(MasterDelayState(base, 0.02), 1.0)
+    base = Seed003VelocityAttitude(cfg, True) if base_name == 'seed003_24' else \
+        VelocityMatching(cfg, base_name == 'vm15')
+    model = base
+    for layer in layers:
+        model = MasterDelayState(model, 0.02) if layer == 'd' else LeverArmStates(model, 1.0)
+    return base, model
+
+
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+@pytest.mark.parametrize('base_name,layers', [('vm15', 'dl'), ('vm12', 'dl'), ('vm12', 'd'), ('vm12', 'l'),
+                                              ('seed003_24', 'dl'), ('vm15', 'ld')])
+def test_stacked_states_measure_and_feed_back_as_their_layers(base_name, layers, dtype):
+    """States appended to a base (the deck's stack: the lever arm on the master delay): H is the
+    base's H, then each layer's columns in the order appended (the delay's: the spot acceleration
+    on the velocity rows; the lever arm's: C_m [w_m x], the velocity change of a longer arm, on the
+    velocity rows only); feedback is the base's on its states, the delay kept, the lever arm's
+    error moved into the corrections and zeroed, the filter's state left as it was."""
+    base, model = _stack(base_name, layers)
     nb = base.n
     a_n = np.array([0.3, -0.2, 0.1])
     c_a = C_M @ expm_so3(MU)
@@ -142,23 +154,41 @@ def test_the_deck_stack_measures_and_feeds_back_as_its_layers(base_name):
                      ins=NavState(q_nb=Rotation.from_matrix(c_a).as_quat(), v_n=np.array([0.5, 0.2, 0.0]),
                                   lat=0.7, lon=2.0, h=0.0), w_n=C_M @ W_M, a_n=a_n)
     h = model.measurement(match(), Corrections(mu=MU)).h
-    assert h.shape[1] == nb + 4
+    assert h.shape[1] == model.n == nb + layers.count('d') + 3 * layers.count('l')
     assert np.array_equal(h[:, :nb], base.measurement(match(), Corrections(mu=MU)).h)
-    np.testing.assert_allclose(h[0:3, nb], a_n, rtol=1e-15, atol=0.0)
     longer = np.stack([C_M @ np.cross(W_M, e) for e in np.eye(3)], axis=1)
-    np.testing.assert_allclose(h[0:3, nb + 1:], longer, rtol=1e-12, atol=1e-15)
-    assert not h[3:, nb + 1:].any()
+    col = nb
+    for layer in layers:
+        width = 1 if layer == 'd' else 3
+        cols = h[:, col:col + width]
+        if layer == 'd':
+            np.testing.assert_allclose(cols[0:3, 0], a_n, rtol=1e-15, atol=0.0)
+        else:
+            np.testing.assert_allclose(cols[0:3], longer, rtol=1e-12, atol=1e-15)
+            assert not cols[3:].any()
+        col += width
 
     rng = np.random.default_rng(5)
-    x = rng.standard_normal(nb + 4) * 1e-3
-    a = rng.standard_normal((nb + 4, nb + 4))
-    p = a @ a.T * 1e-6
+    x = (rng.standard_normal(model.n) * 1e-3).astype(dtype)
+    a = rng.standard_normal((model.n, model.n))
+    p = (a @ a.T * 1e-6).astype(dtype)
+    x_given = x.copy()
     m_all, m_base = match(), match()
     corr_all, corr_base = Corrections(mu=MU.copy()), Corrections(mu=MU.copy())
     x_new = model.feedback(x, p, m_all, m_all.ins, corr_all)
     x_base = base.feedback(x[:nb], p[:nb, :nb], m_base, m_base.ins, corr_base)
-    assert np.array_equal(x_new[:nb], x_base) and x_new[nb] == x[nb] and not x_new[nb + 1:].any()
-    assert np.array_equal(corr_all.dr, x[nb + 1:])
+    assert np.array_equal(x, x_given) and x_new.shape == x.shape
+    assert np.array_equal(x_new[:nb], x_base)
+    col, dr = nb, np.zeros(3)
+    for layer in layers:
+        if layer == 'd':
+            assert x_new[col] == x[col]
+            col += 1
+        else:
+            assert not x_new[col:col + 3].any()
+            dr = dr + x[col:col + 3]
+            col += 3
+    assert np.array_equal(corr_all.dr, dr)
     for f in ('bg', 'ba', 'mu'):
         assert np.array_equal(getattr(corr_all, f), getattr(corr_base, f))
     assert np.array_equal(m_all.ins.q_nb, m_base.ins.q_nb) and np.array_equal(m_all.ins.v_n, m_base.ins.v_n)

@@ -5,6 +5,9 @@ lever arm and the matching reference; a model owns the error state: its labels, 
 propagates, what it measures and how an estimate is fed back. Per IMU interval the engine
 calls `transition(p)` / `process_noise(h)` (or, for a nonlinear model, `propagator(p)`); per
 matching instant `measurement(m, corr)`, then `feedback(x, p, m, nav, corr)` and `misalignment(...)`.
+A model with states appended (`AugmentedModel`: the lever arm, the master delay, nested) asks its
+base for `transition_in`, `measurement_in` and `feedback_in` at its own full size, so the arrays
+are made once however deep the nesting, and each layer fills or takes its own states.
 
 Conventions shared by all models (nav frame ENU, bodies FLU):
     attitude error   C_est = exp(-[phi x]) C_true ~ (I - [phi x]) C_true
@@ -148,10 +151,12 @@ class ErrorModel:
         """Phi in the top-left of an (n, n) identity, n >= self.n (the rows of states appended
         to this model: random constants)."""
         phi = self.transition(p)
-        if n == self.n:
+        nb = self.n
+        if n == nb:
             return phi
-        out = np.eye(n)
-        out[:self.n, :self.n] = phi
+        out = np.zeros((n, n))
+        out[:nb, :nb] = phi
+        out.reshape(-1)[nb * (n + 1)::n + 1] = 1.0         # the appended diagonal
         return out
 
     def process_noise(self, h: float) -> np.ndarray:
@@ -269,10 +274,10 @@ class AugmentedModel(ModelWrapper):
         self.sigma = float(sigma)
         self._qd: dict[float, np.ndarray] = {}
 
-    def _grow(self, a: np.ndarray, corner: float, n: int | None = None) -> np.ndarray:
-        """a (nb, nb) in the top-left of an (n, n) zero matrix (n: this model's size), `corner`
-        on the diagonal below it."""
-        n = self.n if n is None else n
+    def _grow(self, a: np.ndarray, corner: float) -> np.ndarray:
+        """a (nb, nb) in the top-left of this model's (n, n) zero matrix, `corner` on the
+        diagonal below it."""
+        n = self.n
         out = np.zeros((n, n))
         out[:self.nb, :self.nb] = a
         for k in range(self.nb, n):
@@ -313,8 +318,12 @@ class AugmentedModel(ModelWrapper):
         """Write this model's columns of H (rows x n; the appended states from column nb)."""
         raise NotImplementedError
 
-    def feedback(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+    def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         return self.feedback_in(x, p, m, nav, corr)
+
+    def feedback_in(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+        """The base's feedback_in, then what this layer does with its own states (each says)."""
+        raise NotImplementedError
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
         return self.base.misalignment(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

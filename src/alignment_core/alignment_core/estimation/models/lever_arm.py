@@ -30,7 +30,7 @@ class LeverArmStates(AugmentedModel):
         for row, axis in enumerate(self.velocity_rows):
             h[row, nb:nb + 3] = cw[axis]
 
-    def feedback_in(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+    def feedback_in(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         nb = self.nb
         x_new = self.base.feedback_in(x, p, m, nav, corr)
         corr.dr = corr.dr + x[nb:nb + 3]

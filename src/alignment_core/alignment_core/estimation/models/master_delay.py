@@ -55,7 +55,7 @@ class MasterDelayState(AugmentedModel):
     def fill_columns(self, h: np.ndarray, m: Match) -> None:
         h[:, self.nb] = self.column(m, h.shape[0])
 
-    def feedback_in(self, x, p, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
+    def feedback_in(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         return self.base.feedback_in(x, p, m, nav, corr)      # dt is kept, not fed back
 
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
