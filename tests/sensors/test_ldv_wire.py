@@ -147,3 +147,27 @@ def test_one_message_decodes_to_the_bits_of_the_stack_whatever_its_covariance():
         _same_bits(ldv_wire.decode(k, v, c), want)
     kinds = [(s.valid, s.beam is not None) for s in stack]
     assert kinds.count((False, False)) > 50 and kinds.count((True, True)) > 100 and kinds.count((True, False)) > 50
+
+
+def test_the_stack_encodes_to_the_bits_of_each_sample_encoded_alone():
+    """encode_all against encode, sample by sample, over invalid, vector and beam samples, with
+    sigmas whose square the C library's pow rounds away from sigma * sigma (encode's sigma**2)."""
+    samples = _samples()
+    draws = np.random.default_rng(3).uniform(1e-4, 0.05, 100_000).tolist()
+    odd = [s for s in draws if s**2 != s * s][:4]
+    assert len(odd) == 4                      # the case exists on this machine's C library
+    u = np.array([0.6, -0.48, 0.64])
+    samples += [LdvSample(t_ns=-1, v_s=u, sigma=odd[0], valid=True),
+                LdvSample(t_ns=-2, v_s=u, sigma=odd[1], valid=True, beam=u),
+                LdvSample(t_ns=-3, v_s=[1.0, 2.0, 3.0], sigma=odd[2], valid=True, beam=list(u)),
+                LdvSample(t_ns=-4, v_s=u * math.nan, sigma=odd[3], valid=False, beam=u)]
+    linear, cov = ldv_wire.encode_all(samples)
+    assert linear.shape == (len(samples), 3) and cov.shape == (len(samples), 3, 3)
+    for k, s in enumerate(samples):
+        lin1, cov1 = ldv_wire.encode(s)
+        assert linear[k].tobytes() == lin1.tobytes() and cov[k].tobytes() == cov1.tobytes(), k
+    for batch in (samples[:1], samples[1:2], samples[2:3]):     # one kind alone
+        lin_b, cov_b = ldv_wire.encode_all(batch)
+        assert cov_b.tobytes() == ldv_wire.encode(batch[0])[1].tobytes()
+    empty_lin, empty_cov = ldv_wire.encode_all([])
+    assert empty_lin.shape == (0, 3) and empty_cov.shape == (0, 3, 3)

@@ -110,12 +110,31 @@ def transmitted(s: LdvSample) -> LdvSample:
     return decode(s.t_ns, *encode(s))
 
 
-def transmitted_all(samples: list[LdvSample]) -> list[LdvSample]:
-    """`transmitted` of every sample (decoded as one stack)."""
+def encode_all(samples: Sequence[LdvSample]) -> tuple[np.ndarray, np.ndarray]:
+    """`encode` of every sample as stacks: velocities (N, 3) and linear covariances (N, 3, 3),
+    the same bits (each variance is sigma**2 of a Python float, as `encode` squares it: the C
+    library's pow, which rounds differently from x * x now and then)."""
+    n = len(samples)
+    linear = np.array([s.v_s for s in samples], dtype=float).reshape(n, 3)
+    cov = np.zeros((n, 3, 3))
+    var = np.array([s.sigma**2 if s.valid else -1.0 for s in samples])
+    kind = np.array([0 if not s.valid else 1 if s.beam is None else 2 for s in samples], dtype=np.int8)
+    cov[kind == 0, 0, 0] = -1.0
+    vector = kind == 1
+    for i in range(3):
+        cov[vector, i, i] = var[vector]
+    beam = kind == 2
+    if beam.any():
+        u = np.array([s.beam for s, b in zip(samples, beam.tolist()) if b], dtype=float).reshape(-1, 3)
+        cov[beam] = var[beam, None, None] * (u[:, :, None] * u[:, None, :])      # sigma^2 np.outer(u, u)
+    return linear, cov
+
+
+def transmitted_all(samples: Sequence[LdvSample]) -> list[LdvSample]:
+    """`transmitted` of every sample (encoded and decoded as one stack)."""
     if not samples:
         return []
-    wire = [encode(s) for s in samples]
-    return decode_all([s.t_ns for s in samples], np.array([w[0] for w in wire]), np.array([w[1] for w in wire]))
+    return decode_all([s.t_ns for s in samples], *encode_all(samples))
 
 
 def transmitted_stream(samples: Sequence[LdvSample], batch: int) -> Iterator[LdvSample]:
@@ -123,4 +142,4 @@ def transmitted_stream(samples: Sequence[LdvSample], batch: int) -> Iterator[Ldv
     on its own, so the batch size changes no bit): a batch run's whole LDV stream without a
     decoded copy of all of it in memory."""
     for a in range(0, len(samples), batch):
-        yield from transmitted_all(list(samples[a:a + batch]))
+        yield from transmitted_all(samples[a:a + batch])

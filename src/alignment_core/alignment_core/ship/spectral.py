@@ -43,6 +43,7 @@ from alignment_core.samples import ShipBatch, ShipSample
 from alignment_core.ship import rao, sea_state, wave_spectrum
 from alignment_core.ship.config import ShipConfig
 from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack, quintic_coefficients, quintic_values
+from alignment_core.ship.phase_terms import phase_terms
 from alignment_core.ship.stamped import split, stamped_batch
 from alignment_core.ship.track import StraightCourse
 from alignment_core.units import DEG, KNOT
@@ -228,20 +229,19 @@ class WaveFrequencyOnTrack:
         val = np.empty((n, self.n_cols))
         d1 = np.empty((n, self.n_cols))
         d2 = np.empty((n, self.n_cols))
+        terms = np.empty((6, min(n, self.CHUNK), len(c.omega)))
         for a in range(0, n, self.CHUNK):
             sl = slice(a, min(n, a + self.CHUNK))
             ph = np.outer(t[sl], c.omega) - pos[sl] @ kk
             ph += c.phase
-            cs, sn = np.cos(ph), np.sin(ph)
             pd = c.omega - vel[sl] @ kk                      # phi'
             pdd = acc[sl] @ kk                               # -phi''
+            # Z = e^{i phi} = cs + i sn, i phi' Z = -spd + i cpd, G = (i phi'' - phi'^2) Z = gr + i gi
+            cs, sn, spd, cpd, gr, gi = terms[:, :len(ph)]
+            phase_terms(ph, pd, pdd, cs, sn, spd, cpd, gr, gi)
             val[sl] = cs @ wr - sn @ wi                      # Re{Z W}
-            spd, cpd = sn * pd, cs * pd
             d1[sl] = -(spd @ wr + cpd @ wi)                  # Re{i phi' Z W}
-            # Re{(i phi'' - phi'^2) Z W}: G = Z (i phi'' - phi'^2)
-            gr = sn * pdd - cpd * pd                         # Re G
-            gi = -(cs * pdd + spd * pd)                      # Im G
-            d2[sl] = gr @ wr - gi @ wi
+            d2[sl] = gr @ wr - gi @ wi                       # Re{G W}
         out = np.empty((n, 19))
         out[:, 18] = val[:, -1]
         if self.n_sets == 1:
