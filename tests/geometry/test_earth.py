@@ -6,6 +6,8 @@ revolution, and from the standard free-air gradient; never from `earth` itself.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -234,3 +236,22 @@ def test_plane_batch_equals_points_one_at_a_time():
                                for i in range(len(p))])
     assert back.tobytes() == one_back.tobytes()
     np.testing.assert_allclose(back, p, atol=1e-6)
+
+
+def test_one_points_rates_and_position_are_the_array_forms_bits():
+    """nav_rate_point and TangentPlane.from_geodetic_point (the filter's outputs, one point at a
+    time, in Python floats) against omega_ie_n + omega_en_n and from_geodetic, bit for bit, over
+    latitudes, heights and velocities whose powers and tangents round differently in the C
+    library and numpy (x**2 against x * x, numpy's tan against the C library's)."""
+    rng = np.random.default_rng(4)
+    plane = earth.TangentPlane(0.61, -1.2, 3.0)
+    lat = np.r_[rng.uniform(-1.5, 1.5, 3000), 0.0, -0.0, 1e-300]
+    lon = np.r_[rng.uniform(-3.1, 3.1, 3000), 0.0, -0.0, 3.0]
+    h = np.r_[rng.normal(0.0, 500.0, 3000), 0.0, -0.0, 1e4]
+    v = np.r_[rng.normal(0.0, 30.0, (3000, 3)), [[0.0, -0.0, 0.0], [-0.0, 0.0, -0.0], [1.0, 2.0, 3.0]]]
+    assert sum(float(np.tan(x)) != math.tan(x) for x in lat.tolist()) > 0     # the case is met
+    for a, o, z, vel in zip(lat.tolist(), lon.tolist(), h.tolist(), v):
+        want = earth.omega_ie_n(a) + earth.omega_en_n(a, z, vel)
+        got = np.array(earth.nav_rate_point(a, z, float(vel[0]), float(vel[1])))
+        assert got.tobytes() == want.tobytes(), (a, z, vel)
+        assert plane.from_geodetic_point(a, o, z).tobytes() == plane.from_geodetic(a, o, z).tobytes(), (a, o, z)

@@ -61,8 +61,9 @@ class OdometryMaker:
         """p: the filter's covariance; gyro: the last raw gyro rate (None before the first IMU
         step), bg its bias estimate. The body rate w.r.t. the nav frame is the gyro's less the nav
         frame's own rate w.r.t. inertial space (Earth rate and transport rate at the solution)."""
-        w_in = earth.omega_ie_n(st.lat) + earth.omega_en_n(st.lat, st.h, st.v_n)
-        p_w = np.asarray(self._plane.from_geodetic(st.lat, st.lon, st.h), dtype=float).reshape(3)
+        v_e, v_n, _ = as_float64(st.v_n).tolist()
+        w_in = np.array(earth.nav_rate_point(st.lat, st.h, v_e, v_n))
+        p_w = self._plane.from_geodetic_point(st.lat, st.lon, st.h)
         w_m = w_in if gyro is None else gyro - bg
         p = as_float(p)
         v_b, w_b, pose, twist = odometry_parts(

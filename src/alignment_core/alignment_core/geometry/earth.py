@@ -66,6 +66,18 @@ def omega_en_n(lat, h, v_n) -> np.ndarray:
     return out
 
 
+def nav_rate_point(lat: float, h: float, v_e: float, v_n: float) -> tuple[float, float, float]:
+    """omega_ie_n(lat) + omega_en_n(lat, h, v) of one point, ENU, in Python floats: the array
+    forms' bits (a numpy scalar's power is the C library's pow, as a Python float's is; the
+    tangent is numpy's own, which differs from the C library's in the last bit now and then)."""
+    sl = math.sin(lat)
+    den = 1.0 - E2 * sl**2
+    r_n = A / math.sqrt(den)
+    r_m = A * (1.0 - E2) / den**1.5
+    return (0.0 + -v_n / (r_m + h), OMEGA_IE * math.cos(lat) + v_e / (r_n + h),
+            OMEGA_IE * sl + v_e * float(np.tan(lat)) / (r_n + h))
+
+
 def geodetic_to_ecef(lat, lon, h) -> np.ndarray:
     """ECEF position (..., 3) of geodetic coordinates (rad, rad, m)."""
     _, r_n = radii(lat)
@@ -104,6 +116,13 @@ class TangentPlane:
 
     def from_geodetic(self, lat, lon, h) -> np.ndarray:
         return (geodetic_to_ecef(lat, lon, h) - self.origin) @ self.c.T
+
+    def from_geodetic_point(self, lat: float, lon: float, h: float) -> np.ndarray:
+        """from_geodetic of one point (3,), its bits, the geodetic terms in Python floats."""
+        sl, cl = math.sin(lat), math.cos(lat)
+        r_n = A / math.sqrt(1.0 - E2 * sl**2)
+        ecef = np.array([(r_n + h) * cl * math.cos(lon), (r_n + h) * cl * math.sin(lon), (r_n * (1.0 - E2) + h) * sl])
+        return (ecef - self.origin) @ self.c.T
 
     def from_geodetic_rows(self, lat, lon, h) -> np.ndarray:
         """from_geodetic with each of K points (lat, lon, h of shape (K,)) computed alone
