@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from alignment_core.compiled import kernel
-from alignment_core.geometry.rotations import cross3
+from alignment_core.geometry.rotations import cross_f, floats
 
 MIN_FILL = 0.8
 """The fit is used once its samples span this fraction of the window (None before)."""
@@ -157,6 +157,7 @@ def reference_specific_force(f_slave_n: np.ndarray, a_spot_n: np.ndarray, v_n: n
                              w_ie: np.ndarray, w_en: np.ndarray) -> np.ndarray:
     """(3,) the specific force for the error model: the slave's vertical, the horizontal (E, N)
     from the spot's acceleration plus the Coriolis and transport terms (ENU: gravity is vertical)."""
-    f = np.array(f_slave_n, dtype=float)
-    f[0:2] = (a_spot_n + cross3(2.0 * w_ie + w_en, v_n))[0:2]
-    return f
+    ie, en = floats(w_ie), floats(w_en)
+    cx, cy, _ = cross_f((2.0 * ie[0] + en[0], 2.0 * ie[1] + en[1], 2.0 * ie[2] + en[2]), floats(v_n))
+    ax, ay, _ = floats(a_spot_n)
+    return np.array((ax + cx, ay + cy, float(f_slave_n[2])))      # Python floats: numpy's bits, a third of its time
