@@ -276,13 +276,15 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
         run.node_start = 'fork' if fork else f'start_node.sh ({unsafe})'
         if not fork:
             print(f'run_graph: nodes started through scripts/start_node.sh: {unsafe}', file=sys.stderr)
-        # the ship first, once its own code is imported (its ship model's module too): the first
-        # message waits for its start-up, which the other nodes' imports and start-up overlap; it
-        # publishes nothing before every reader it waits for has matched. It runs no compiled kernel.
+        # the ship first, once its own code is imported (its ship model's module too, and numba:
+        # the spectral sea runs a kernel, which it would otherwise import on the way to the first
+        # message): the first message waits for its start-up, which the other nodes' imports and
+        # start-up overlap; it publishes nothing before every reader it waits for has matched
         try:
             if fork:
                 forked.entry_point('ship_motion_node')
                 motion.model_class(sc.ship)
+                compiled.activate()            # the slave and the filter run kernels too
             start(run, 'ship_motion_node', params, '-p', f'real_time_factor:={a.real_time_factor}',
                   '-p', _list_param('wait_subscribers', MATCHED['ship_motion_node']),
                   '-p', 'pace_topics:=[' + ','.join(f'"{t}"' for t in pace_topics_of(sc)) + ']',
@@ -290,7 +292,6 @@ def _run(run: Run, a: argparse.Namespace, sc: core_scenario.Scenario, params: Pa
             if fork:
                 for n in nodes_of(sc):
                     forked.entry_point(n)      # every other node's imports once, before their forks
-                compiled.activate()            # numba too: the slave and the filter run kernels
             for n in nodes_of(sc):
                 start(run, n, params, matched=matched, fork=fork)
         finally:
