@@ -255,3 +255,17 @@ def test_one_points_rates_and_position_are_the_array_forms_bits():
         got = np.array(earth.nav_rate_point(a, z, float(vel[0]), float(vel[1])))
         assert got.tobytes() == want.tobytes(), (a, z, vel)
         assert plane.from_geodetic_point(a, o, z).tobytes() == plane.from_geodetic(a, o, z).tobytes(), (a, o, z)
+
+
+def test_one_point_at_an_infinite_latitude_or_longitude_gives_the_array_forms_nans():
+    """The C library's sine raises on an infinite angle where numpy gives NaN: a diverged slave's
+    odometry must come out non-finite (and be caught as such), not raise."""
+    plane = earth.TangentPlane(0.61, -1.2, 3.0)
+    v = np.array([1.0, 2.0, 0.0])
+    for lat, lon in ((math.inf, 0.3), (-math.inf, 0.3), (0.6, math.inf), (0.6, -math.inf), (math.nan, 0.3)):
+        with np.errstate(invalid='ignore'):
+            want_rate = earth.omega_ie_n(lat) + earth.omega_en_n(lat, 10.0, v)
+            want_pos = plane.from_geodetic(lat, lon, 10.0)
+            assert np.array(earth.nav_rate_point(lat, 10.0, 1.0, 2.0)).tobytes() == want_rate.tobytes()
+            assert plane.from_geodetic_point(lat, lon, 10.0).tobytes() == want_pos.tobytes()
+        assert not np.all(np.isfinite(want_pos))

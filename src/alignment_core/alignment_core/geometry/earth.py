@@ -69,7 +69,11 @@ def omega_en_n(lat, h, v_n) -> np.ndarray:
 def nav_rate_point(lat: float, h: float, v_e: float, v_n: float) -> tuple[float, float, float]:
     """omega_ie_n(lat) + omega_en_n(lat, h, v) of one point, ENU, in Python floats: the array
     forms' bits (a numpy scalar's power is the C library's pow, as a Python float's is; the
-    tangent is numpy's own, which differs from the C library's in the last bit now and then)."""
+    tangent is numpy's own, which differs from the C library's in the last bit now and then).
+    An infinite latitude gives the array forms' NaNs (the C library's sine raises on it)."""
+    if not math.isfinite(lat):
+        e, n, u = (omega_ie_n(lat) + omega_en_n(lat, h, np.array([v_e, v_n, 0.0]))).tolist()
+        return e, n, u
     sl = math.sin(lat)
     den = 1.0 - E2 * sl**2
     r_n = A / math.sqrt(den)
@@ -118,7 +122,10 @@ class TangentPlane:
         return (geodetic_to_ecef(lat, lon, h) - self.origin) @ self.c.T
 
     def from_geodetic_point(self, lat: float, lon: float, h: float) -> np.ndarray:
-        """from_geodetic of one point (3,), its bits, the geodetic terms in Python floats."""
+        """from_geodetic of one point (3,), its bits, the geodetic terms in Python floats (an
+        infinite latitude or longitude: from_geodetic's NaNs, where the C library's sine raises)."""
+        if not (math.isfinite(lat) and math.isfinite(lon)):
+            return self.from_geodetic(lat, lon, h)
         sl, cl = math.sin(lat), math.cos(lat)
         r_n = A / math.sqrt(1.0 - E2 * sl**2)
         ecef = np.array([(r_n + h) * cl * math.cos(lon), (r_n + h) * cl * math.sin(lon), (r_n * (1.0 - E2) + h) * sl])
