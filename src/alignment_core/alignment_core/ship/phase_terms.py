@@ -8,7 +8,7 @@ components) block; one pass over it is about twice as fast (the kernel's cos and
 library's, as numpy's are here, and each product is the one numpy forms: the same bits)."""
 from __future__ import annotations
 
-import math
+import numpy as np
 
 from alignment_core.compiled import kernel
 
@@ -21,8 +21,8 @@ def phase_terms(ph, pd, pdd, cs, sn, spd, cpd, gr, gi):
     n, m = ph.shape
     for i in range(n):
         for j in range(m):
-            c = math.cos(ph[i, j])
-            s = math.sin(ph[i, j])
+            c = np.cos(ph[i, j])              # numpy's: NaN at an infinite phase, interpreted too
+            s = np.sin(ph[i, j])
             d = pd[i, j]
             dd = pdd[i, j]
             sd = s * d
