@@ -237,7 +237,7 @@ class WaveFrequencyOnTrack:
             pd = c.omega - vel[sl] @ kk                      # phi'
             pdd = acc[sl] @ kk                               # -phi''
             if pd.shape != ph.shape or pdd.shape != ph.shape:    # one row of kinematics: the kernel reads all
-                pd, pdd = (np.ascontiguousarray(np.broadcast_to(a, ph.shape)) for a in (pd, pdd))
+                pd, pdd = (np.ascontiguousarray(np.broadcast_to(x, ph.shape)) for x in (pd, pdd))
             # Z = e^{i phi} = cs + i sn, i phi' Z = -spd + i cpd, G = (i phi'' - phi'^2) Z = gr + i gi
             cs, sn, spd, cpd, gr, gi = terms[:, :len(ph)]
             phase_terms(ph, pd, pdd, cs, sn, spd, cpd, gr, gi)
