@@ -258,3 +258,24 @@ def test_rate_matching_on_a_rigid_mount_sharpens_the_misalignment_and_stays_cons
     rate = _deck({'filter.rate_matching': True})
     assert np.all(rate.sigma * 5.0 < vel.sigma)
     assert np.all(np.abs(rate.err) < 3.0 * rate.sigma)
+
+
+def test_a_match_with_another_master_attitude_keeps_every_other_field():
+    """Match.with_master_attitude is dataclasses.replace(m, c_m=...): every field, one added later
+    too, carried over as the same object."""
+    import dataclasses
+    values = {f.name: object() for f in dataclasses.fields(Match)}
+    m = Match(**values)
+    c = object()
+    out = m.with_master_attitude(c)
+    assert out.c_m is c
+    for f in dataclasses.fields(Match):
+        if f.name != 'c_m':
+            assert getattr(out, f.name) is values[f.name], f.name
+
+
+@pytest.mark.parametrize('axes, picked', [((0, 1, 2), [0, 1, 2]), ((0, 1), [0, 1]), ((2,), [2]), ((1, 2), [1, 2])])
+def test_rows_of_selects_the_axes_in_order(axes, picked):
+    from alignment_core.estimation.models.base import rows_of
+    a = np.arange(12.0).reshape(3, 4)
+    assert np.array_equal(a[rows_of(axes)], a[picked])

@@ -28,12 +28,12 @@ def test_transition_compiled_equals_interpreted_and_the_series(n):
         h = float(rng.choice([0.0025, 0.01]))
         idx = vm._fh_index(n)
         got = vm.transition(c, f, w_ie, w_en, h, n)
-        assert _same(got, vm._transition.py_func(c, f, w_ie, w_en, h, idx, n, n))
+        assert _same(got, vm.phi_from_cells.py_func(c, f, w_ie, w_en, h, idx, n, n))
         fh = vm.continuous(c, f, w_ie, w_en, n) * h
         assert np.allclose(got, np.eye(n) + fh + fh @ fh / 2, rtol=0.0, atol=1e-15)
         # with states appended (random constants): the same block in an identity, exactly
         wide = vm.transition(c, f, w_ie, w_en, h, n, n + 4)
-        assert _same(wide, vm._transition.py_func(c, f, w_ie, w_en, h, idx, n, n + 4))
+        assert _same(wide, vm.phi_from_cells.py_func(c, f, w_ie, w_en, h, idx, n, n + 4))
         grown = np.eye(n + 4)
         grown[:n, :n] = got
         assert _same(wide, grown)

@@ -55,6 +55,7 @@ class TransferAlignment(ImuEvents, EngineViews):
         self._cfg = cfg
         self._plane = plane
         self._model = make_model(cfg)
+        self._cells = self._model.transition_cells()
         self._rel = RelativeVelocity(cfg)
         streams: tuple[str, ...] = DOPPLER_STREAMS if self._model.uses_doppler else STREAMS
         if not self._rel.takes_ldv:

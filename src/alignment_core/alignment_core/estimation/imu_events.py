@@ -9,17 +9,20 @@ from typing import cast
 
 import numpy as np
 
+from alignment_core.compiled import FLOAT64
 from alignment_core.estimation import status
 from alignment_core.estimation.anchoring import bridge_covariance, dead_reckoned
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.consistency import NisMonitor
 from alignment_core.estimation.deck_run import DeckRun
 from alignment_core.estimation.filters.base import NonlinearFilter
+from alignment_core.estimation.filters.kalman import KalmanFilter
 from alignment_core.estimation.health import BREAKDOWN_ERRORS, ERROR, WARN
 from alignment_core.estimation.launch_detection import LaunchDetector
 from alignment_core.estimation.matching import LiveSolution, Matcher, MatchResults
 from alignment_core.estimation.models import ErrorModel, Propagation
 from alignment_core.estimation.outputs import Counters
+from alignment_core.estimation.propagation_step import strapdown_and_predict
 from alignment_core.estimation.reference_force import SpotAcceleration, reference_specific_force
 from alignment_core.estimation.whiteness import InnovationWhiteness
 from alignment_core.navigation.history import SlaveHistory
@@ -30,6 +33,7 @@ class ImuEvents:
     """The IMU side of the event loop: propagation, buffering before anchoring, gap bridging."""
     _cfg: FilterConfig
     _model: ErrorModel
+    _cells: tuple[np.ndarray, int] | None       # the model's transition_cells()
     _counters: Counters
     _health: status.Health
     _monitor: NisMonitor
@@ -131,46 +135,63 @@ class ImuEvents:
             self._counters.skipped_before_init += 1
 
     def _propagate(self, live: LiveSolution, t: int, s: ImuSample) -> None:
-        """The strapdown over the IMU interval ending at t, then the filter's predict."""
+        """The strapdown over the IMU interval ending at t, then the filter's predict (in one
+        compiled call where the model and the filter allow: propagation_step.py)."""
         h = (t - live.t_ns) * 1e-9
         if h > self._cfg.max_gap_factor * self._imu_dt_nominal:
             self._counters.imu_gaps += 1
         corr = self._results.corr
-        dth = (s.gyro - corr.bg) * h
-        dv = (s.accel - corr.ba) * h
         ins = live.ins
         snap = live.history.record(live.t_ns, ins.s)
         v_start = ins.s.v_n
-        f_n = ins.update(dth, dv, h)
+        running = self._health.running
+        a_spot = None
+        if running and self._spot_accel is not None and self._cfg.specific_force == 'reference' \
+                and not self._launch.moving:
+            a_spot = self._spot_accel.acceleration()
+        kf = live.kf
+        cells = self._cells
+        if running and cells is not None and type(kf) is KalmanFilter and kf.dtype is FLOAT64:
+            f_model, snap.phi = strapdown_and_predict(ins, kf, cells, s.gyro, corr.bg, s.accel, corr.ba, h,
+                                                      self._process_noise(t, h), a_spot)
+            self._after_step(live, t, s, v_start, h)
+            live.prop = Propagation(ins.c_start, f_model, ins.w_ie, ins.w_en, ins.s.v_n, ins.s.lat, ins.s.h, h)
+            return
+        f_n = ins.update((s.gyro - corr.bg) * h, (s.accel - corr.ba) * h, h)
+        self._after_step(live, t, s, v_start, h)
+        if not running:
+            return
         st = ins.s
+        f_model = f_n if a_spot is None else reference_specific_force(f_n, a_spot, st.v_n, ins.w_ie, ins.w_en)
+        p = live.prop = Propagation(ins.c_start, f_model, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
+        qd = self._process_noise(t, h)
+        try:
+            if self._model.nonlinear:
+                fun, jac = self._model.propagator(p)
+                cast(NonlinearFilter, kf).predict_nonlinear(fun, qd, jac)
+            else:
+                phi = self._model.transition(p)
+                snap.phi = phi
+                kf.predict(phi, qd)
+        except (np.linalg.LinAlgError, FloatingPointError, ValueError) as e:
+            self._fail(f'predict: {e}')
+
+    def _after_step(self, live: LiveSolution, t: int, s: ImuSample, v_start: np.ndarray, h: float) -> None:
+        """The live solution's time, rate and history after its strapdown step to t."""
         if self._track_intervals:
-            self._matcher.record_interval(t, h, s.gyro, st.v_n - v_start)
+            self._matcher.record_interval(t, h, s.gyro, live.ins.s.v_n - v_start)
         live.t_ns = t
         live.gyro = s.gyro
         live.history.prune(t - self._span_ns, t)
-        if not self._health.running:
-            return
-        f_model = f_n
-        if self._spot_accel is not None and self._cfg.specific_force == 'reference' and not self._launch.moving:
-            a_spot = self._spot_accel.acceleration()
-            if a_spot is not None:
-                f_model = reference_specific_force(f_n, a_spot, st.v_n, ins.w_ie, ins.w_en)
-        p = live.prop = Propagation(ins.c_start, f_model, ins.w_ie, ins.w_en, st.v_n, st.lat, st.h, h)
+
+    def _process_noise(self, t: int, h: float) -> np.ndarray:
+        """Qd over the interval h ending at t, with the launch noise just after the launch."""
         qd = self._model.process_noise(h)
         t_launch = self._launch.t_launch_ns
         if self._q_launch is not None and t_launch is not None and t - t_launch <= self._launch_ns \
                 and t > t_launch:
             qd = qd + self._q_launch * h
-        try:
-            if self._model.nonlinear:
-                fun, jac = self._model.propagator(p)
-                cast(NonlinearFilter, live.kf).predict_nonlinear(fun, qd, jac)
-            else:
-                phi = self._model.transition(p)
-                snap.phi = phi
-                live.kf.predict(phi, qd)
-        except (np.linalg.LinAlgError, FloatingPointError, ValueError) as e:
-            self._fail(f'predict: {e}')
+        return qd
 
     def _bridge(self, live: LiveSolution, t: int) -> None:
         """An IMU gap longer than gap_bridge_factor intervals is never one strapdown step: the

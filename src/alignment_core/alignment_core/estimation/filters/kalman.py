@@ -107,6 +107,14 @@ class KalmanFilter(Counters):
         kernels.predict(self._x, self._P, phi, qd)
         self.n_predicts += 1
 
+    def arrays_to_predict(self) -> tuple[np.ndarray, np.ndarray]:
+        """(x, P) as the filter's own C-ordered arrays, for a compiled step that predicts them in
+        place as `predict` does (estimation/propagation_step.py); counted as a predict."""
+        if self._x_out or self._p_out:
+            self._own()
+        self.n_predicts += 1
+        return self._x, self._P
+
     def _innovation(self, z, h, r, x, p):
         """(y = z - H x, P H^T, S = H P H^T + R) for the subclasses that change the prior."""
         return kernels.innovation(x, p, z.reshape(1) if z.ndim == 0 else z, h, r)

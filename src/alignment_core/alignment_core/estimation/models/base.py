@@ -86,6 +86,12 @@ class Match:
     a_n: np.ndarray | None = None     # acceleration of the ship's deck spot, nav frame (delay state); None: unknown
     rate: RateInputs | None = None    # angular rates over the IMU interval ending here (rate matching)
 
+    def with_master_attitude(self, c_m: np.ndarray) -> Match:
+        """This match with the master attitude c_m instead (dataclasses.replace's result, in a
+        tenth of its time)."""
+        return Match(c_m, self.w_m, self.r, self.u_n, self.v_ref, self.z_vel, self.r_vel, self.ins, self.c_nom,
+                     self.w_n, self.a_n, self.rate)
+
 
 @dataclass
 class Corrections:
@@ -159,6 +165,12 @@ class ErrorModel:
         out.reshape(-1)[nb * (n + 1)::n + 1] = 1.0         # the appended diagonal
         return out
 
+    def transition_cells(self) -> tuple[np.ndarray, int] | None:
+        """(F h's cell indices, n) when `transition_in(p, size)` is velocity matching's compiled
+        phi_from_cells(..., cells, n, size) (models/velocity_matching.py), so that the engine can
+        compile an IMU interval whole (estimation/propagation_step.py); else None."""
+        return None
+
     def process_noise(self, h: float) -> np.ndarray:
         """Qd (n, n) over an interval h."""
         raise NotImplementedError
@@ -204,6 +216,12 @@ class ErrorModel:
         raise NotImplementedError
 
 
+def rows_of(axes: tuple[int, ...]) -> slice | np.ndarray:
+    """What selects the rows `axes` of an array: a slice when they are its first rows in order
+    (a view, no copy), else an index array."""
+    return slice(0, len(axes)) if axes == tuple(range(len(axes))) else np.array(axes, dtype=np.intp)
+
+
 def nominal_attitude(m: Match) -> np.ndarray:
     """C_m c_nom: the aircraft attitude the master predicts with zero misalignment."""
     return m.c_m if m.c_nom is None else m.c_m @ m.c_nom
@@ -245,6 +263,11 @@ class ModelWrapper(ErrorModel):
 
     def transition(self, p: Propagation) -> np.ndarray:
         return self.base.transition(p)
+
+    def transition_cells(self) -> tuple[np.ndarray, int] | None:
+        """The base's: a wrapper's Phi is its base's, grown by identity rows (an augmented model's
+        appended constants, or ErrorModel.transition_in's)."""
+        return self.base.transition_cells()
 
     def process_noise(self, h: float) -> np.ndarray:
         return self.base.process_noise(h)

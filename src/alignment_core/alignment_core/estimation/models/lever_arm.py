@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from alignment_core.estimation.models.base import AugmentedModel, Corrections, ErrorModel, Match
+from alignment_core.estimation.models.base import AugmentedModel, Corrections, ErrorModel, Match, rows_of
 from alignment_core.geometry.rotations import skew
 from alignment_core.navigation.strapdown import NavState
 
@@ -23,12 +23,11 @@ class LeverArmStates(AugmentedModel):
 
     def __init__(self, base: ErrorModel, sigma_m: float) -> None:
         super().__init__(base, '+lever_arm', ('dr_x', 'dr_y', 'dr_z'), sigma_m)
+        self._velocity = rows_of(self.velocity_rows)
 
     def fill_columns(self, h: np.ndarray, m: Match) -> None:
-        cw = m.c_m @ skew(m.w_m)
         nb = self.nb
-        for row, axis in enumerate(self.velocity_rows):
-            h[row, nb:nb + 3] = cw[axis]
+        h[:len(self.velocity_rows), nb:nb + 3] = (m.c_m @ skew(m.w_m))[self._velocity]
 
     def feedback_in(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         nb = self.nb

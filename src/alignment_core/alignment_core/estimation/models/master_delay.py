@@ -19,8 +19,6 @@ state 4 (0.1-0.3 m/s^2 at the spot) 10 ms is 1-3 mm/s, a few seconds of 1 cm/s L
 """
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from alignment_core.estimation.models.base import (
@@ -28,9 +26,10 @@ from alignment_core.estimation.models.base import (
     Corrections,
     ErrorModel,
     Match,
+    rows_of,
 )
 from alignment_core.estimation.models.rate_matching import mid_interval_attitude
-from alignment_core.geometry.rotations import rotvec_to_dcm
+from alignment_core.geometry.rotations import floats, rotvec_to_dcm_f
 from alignment_core.navigation.strapdown import NavState
 
 
@@ -39,15 +38,17 @@ class MasterDelayState(AugmentedModel):
 
     def __init__(self, base: ErrorModel, sigma_s: float) -> None:
         super().__init__(base, '+delay', ('dt_master',), sigma_s)
+        self._velocity = rows_of(self.velocity_rows)
+        self._attitude = rows_of(self.attitude_rows)
 
     def column(self, m: Match, rows: int) -> np.ndarray:
         """dz/d(dt) for a measurement of `rows` rows (velocity, attitude, then rate rows)."""
         col = np.zeros(rows)
         nv, na = len(self.velocity_rows), len(self.attitude_rows)
         if m.a_n is not None:
-            col[:nv] = m.a_n[list(self.velocity_rows)]
+            col[:nv] = m.a_n[self._velocity]
         if na and m.w_n is not None:
-            col[nv:nv + na] = -m.w_n[list(self.attitude_rows)]
+            col[nv:nv + na] = -m.w_n[self._attitude]
         if rows > nv + na and m.rate is not None:
             col[nv + na:nv + na + 3] = mid_interval_attitude(m, m.rate).T @ m.rate.w_dot_n
         return col
@@ -63,5 +64,7 @@ class MasterDelayState(AugmentedModel):
         C_m(t) = exp([w_n dt x]) C_m(t - dt) (the dt sigma's share, |w_n| sigma_dt, is left out:
         0.02 rad/s x 1 ms is 0.07')."""
         if m.w_n is not None:
-            m = replace(m, c_m=rotvec_to_dcm(m.w_n * x[self.nb]) @ m.c_m)
+            dt = float(x[self.nb])
+            wx, wy, wz = floats(m.w_n)
+            m = m.with_master_attitude(np.array(rotvec_to_dcm_f(wx * dt, wy * dt, wz * dt)).reshape(3, 3) @ m.c_m)
         return self.base.misalignment(x[:self.nb], p[:self.nb, :self.nb], m, nav, corr)

@@ -108,20 +108,28 @@ def _fh_index(n: int) -> np.ndarray:
 _FH_INDEX: dict[int, np.ndarray] = {}
 
 
-def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray,
-               h: float, n: int = N, size: int | None = None) -> np.ndarray:
-    """Phi (n, n) over an interval h, from the mean attitude, specific force and rates: the
-    compiled _transition (its numbers are those of `continuous(...) * h` written block by block);
-    size > n: in the top-left of a (size, size) identity (states appended to the model)."""
+def fh_index(n: int) -> np.ndarray:
+    """_fh_index(n), made once per n (shared: not to be written)."""
     idx = _FH_INDEX.get(n)
     if idx is None:
         idx = _FH_INDEX[n] = _fh_index(n)
-    return _transition(as_float64(c_nb), as_float64(f_n), as_float64(w_ie), as_float64(w_en), float(h), idx, n,
+    return idx
+
+
+def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.ndarray,
+               h: float, n: int = N, size: int | None = None) -> np.ndarray:
+    """Phi (n, n) over an interval h, from the mean attitude, specific force and rates: the
+    compiled phi_from_cells (its numbers are those of `continuous(...) * h` written block by block);
+    size > n: in the top-left of a (size, size) identity (states appended to the model)."""
+    idx = _FH_INDEX.get(n)
+    if idx is None:
+        idx = fh_index(n)
+    return phi_from_cells(as_float64(c_nb), as_float64(f_n), as_float64(w_ie), as_float64(w_en), float(h), idx, n,
                        n if size is None else size)
 
 
 @kernel
-def _transition(c_nb, f_n, w_ie, w_en, h, idx, n, size):
+def phi_from_cells(c_nb, f_n, w_ie, w_en, h, idx, n, size):
     """I + F h + (F h)^2 / 2 with F h's 36 non-zero entries (in _fh_index's order) in float
     arithmetic, in the top-left of a (size, size) identity; c_nb (3, 3), f_n, w_ie, w_en (3,),
     idx (36,) flat cell indices of an (n, n) array."""
@@ -221,6 +229,9 @@ class VelocityMatching(ErrorModel):
 
     def transition_in(self, p: Propagation, n: int) -> np.ndarray:
         return transition(p.c_nb, p.f_n, p.w_ie, p.w_en, p.h, self._n, n)
+
+    def transition_cells(self) -> tuple[np.ndarray, int]:
+        return fh_index(self._n), self._n
 
     def process_noise(self, h: float) -> np.ndarray:
         qd = self._qd.get(h)
