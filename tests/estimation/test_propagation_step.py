@@ -5,11 +5,11 @@ own transition; and an engine run through it against the same run through the th
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import itertools
 
 import numpy as np
 import pytest
+from support.estimates import digest
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
@@ -140,16 +140,6 @@ def test_the_kernel_compiled_is_the_kernel_interpreted():
         assert np.array_equal(a, b) and type(a) is type(b)
 
 
-def _digest(filt) -> str:
-    h = hashlib.sha256()
-    for e in filt.published:
-        for f in dataclasses.fields(e):
-            v = getattr(e, f.name)
-            h.update(np.ascontiguousarray(v).tobytes() if isinstance(v, np.ndarray) else repr(v).encode())
-    h.update(repr(filt.counters).encode())
-    return h.hexdigest()
-
-
 @pytest.mark.parametrize('name', ['deck', 'catapult_paper'])
 def test_an_engine_run_is_the_same_through_the_three_calls(name, monkeypatch):
     """A short run of the carrier's deck (the reference specific force, the lever-arm and delay
@@ -165,7 +155,7 @@ def test_an_engine_run_is_the_same_through_the_three_calls(name, monkeypatch):
         return fused(*args)
 
     monkeypatch.setattr(imu_events, 'strapdown_and_predict', counted)
-    compiled_run = _digest(pipeline.align(sc, inp))
+    compiled_run = digest(pipeline.align(sc, inp))
     assert len(calls) > 0.9 * len(inp.imu)
     init = engine_module.TransferAlignment.__init__
 
@@ -175,5 +165,5 @@ def test_an_engine_run_is_the_same_through_the_three_calls(name, monkeypatch):
 
     monkeypatch.setattr(engine_module.TransferAlignment, '__init__', without_cells)
     calls.clear()
-    assert _digest(pipeline.align(sc, inp)) == compiled_run
+    assert digest(pipeline.align(sc, inp)) == compiled_run
     assert not calls

@@ -49,8 +49,8 @@ def test_misalignment_compiled_equals_interpreted(dtype, master_states):
         c_m, x = _dcm(rng), rng.standard_normal(15) * 1e-3
         a = rng.standard_normal((15, 15))
         p = (a @ a.T * 1e-6).astype(dtype)
-        got = vm._misalignment(q, c_m, x, p, master_states)
-        want = vm._misalignment.py_func(q, c_m, x, p, master_states)
+        got = vm.misalignment_k(q, c_m, x, p, master_states)
+        want = vm.misalignment_k.py_func(q, c_m, x, p, master_states)
         assert all(_same(g, w) for g, w in zip(got, want))
 
 
@@ -100,6 +100,6 @@ def test_feedback_is_the_numpy_feedback(dtype, n):
         want = np.zeros(n)
         want[12:] = x[12:]
         assert _same(x_new, want)
-        got = vm._feedback.py_func(q, v, bg, ba, x.astype(float))
+        got = vm.feedback_k.py_func(q, v, bg, ba, x.astype(float))
         for a, b in zip(got, (nav.q_nb, nav.v_n, corr.bg, corr.ba, x_new)):
             assert _same(a, b)

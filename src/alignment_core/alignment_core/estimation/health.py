@@ -47,12 +47,15 @@ class NumericalBreakdownError(Exception):
 BREAKDOWN_ERRORS = (np.linalg.LinAlgError, FloatingPointError, ValueError, NumericalBreakdownError)
 
 
+UNHEALTHY = 'covariance not positive definite or not finite'
+
+
 def check_health(x: np.ndarray, p: np.ndarray) -> None:
     """Raise NumericalBreakdownError unless x is finite and P has a finite, positive diagonal
     (a Cholesky of every P would cost more than the update; a negative or non-finite
     variance is how single-precision breakdowns show first)."""
     if not healthy(x, p):
-        raise NumericalBreakdownError('covariance not positive definite or not finite')
+        raise NumericalBreakdownError(UNHEALTHY)
 
 
 @kernel

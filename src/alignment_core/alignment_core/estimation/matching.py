@@ -11,15 +11,18 @@ from typing import NamedTuple, Protocol, cast
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from alignment_core.compiled import as_float64, kernel
+from alignment_core.compiled import FLOAT64, as_float64, kernel
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.filter_factory import EngineFilter
 from alignment_core.estimation.filters.base import NonlinearFilter, solve
+from alignment_core.estimation.filters.kalman import KalmanFilter
 from alignment_core.estimation.filters.lowpass import ButterworthLowPass
 from alignment_core.estimation.health import check_health
+from alignment_core.estimation.match_step import update_and_feed_back
 from alignment_core.estimation.models import Corrections, ErrorModel, Match, Measurement, Propagation
 from alignment_core.estimation.models.base import RateInputs
 from alignment_core.estimation.models.beam import project_on_beam
+from alignment_core.estimation.models.velocity_matching import VelocityMatching
 from alignment_core.estimation.outputs import Counters
 from alignment_core.estimation.reference_force import SpotAcceleration
 from alignment_core.geometry.rotations import cross3, floats, quat_mul_f, quat_to_dcm
@@ -102,6 +105,7 @@ class Matcher:
                  counters: Counters) -> None:
         self._cfg = cfg
         self._model = model
+        self._vm_states = model.n if type(model) is VelocityMatching else 0   # plain vm12 / vm15: match_step.py
         self._counters = counters
         self._compensate = cfg.lever_arm_treatment == 'compensation'
         self._r0 = np.asarray(cfg.lever_arm_m, dtype=float)
@@ -252,6 +256,11 @@ class Matcher:
         z_vel = nav.v_n - ref.v_ref
         if self._lowpass is not None:
             z_vel = self._lowpass.step(z_vel)
+        kf = live.kf
+        if self._vm_states and nav is live.ins.s and ref.beam_n is None and type(kf) is KalmanFilter \
+                and kf.dtype is FLOAT64:
+            self._update_compiled(live, kf, t_v, ref, z_vel, r_vel)
+            return
         match = Match(c_m=ref.c_m, w_m=m.w_b, r=ref.r, u_n=ref.u_n, v_ref=ref.v_ref, z_vel=z_vel,
                       r_vel=r_vel, ins=nav, c_nom=self.c_nom)
         if extras is not None:
@@ -260,7 +269,6 @@ class Matcher:
         meas = self._model.measurement(match, res.corr)
         if ref.beam_n is not None:
             meas = project_on_beam(meas, ref.beam_n)
-        kf = live.kf
         gate = self._gate_now()
         res.dof = len(meas.z)
         if meas.h is None:
@@ -284,6 +292,30 @@ class Matcher:
         kf.x = x_new
         res.anchor = (ref.c_m, nav.q_nb)
         res.mu, res.mu_sigma = self._model.misalignment(x_new, p, match, nav, res.corr)
+        res.t_mu = t_v
+
+    def _update_compiled(self, live: LiveSolution, kf: KalmanFilter, t_v: int, ref: Reference, z_vel: np.ndarray,
+                         r_vel: np.ndarray) -> None:
+        """update_master's update, feedback and misalignment for plain velocity matching under the
+        plain Kalman filter at the live solution's time, in one compiled call (match_step.py)."""
+        res = self.results
+        gate = self._gate_now()
+        res.dof = 3
+        st = live.ins.s
+        q0, v0, pos0 = st.q_nb, st.v_n, (st.lat, st.lon, st.h)
+        upd, fed = update_and_feed_back(kf, self._vm_states, z_vel, ref.u_n, r_vel, gate, st, res.corr,
+                                        ref.c_m if self.c_nom is None else ref.c_m @ self.c_nom)
+        res.nis = upd.nis
+        if self._gated(upd.accepted, gate) or fed is None:
+            return
+        self._counters.updates += 1
+        res.innovation, res.innovation_cov = upd.innovation, upd.s
+        res.x = fed.x
+        live.history.prune(min(t_v, live.t_ns - self._doppler_lat_ns), live.t_ns)
+        self._carry(live, q0, v0, pos0, st)
+        kf.x = fed.x_kept
+        res.anchor = (ref.c_m, st.q_nb)
+        res.mu, res.mu_sigma = fed.mu, fed.mu_sigma
         res.t_mu = t_v
 
     def update_doppler(self, live: LiveSolution, t: int, s: DopplerSample, past: Past) -> None:
@@ -320,6 +352,13 @@ class Matcher:
         st = live.ins.s
         q0, v0, pos0 = st.q_nb, st.v_n, (st.lat, st.lon, st.h)
         x_new = self._model.feedback(x, p, match, st, self.results.corr)
+        return x_new, self._carry(live, q0, v0, pos0, nav)
+
+    def _carry(self, live: LiveSolution, q0: np.ndarray, v0: np.ndarray, pos0: tuple[float, float, float],
+               nav: NavState) -> NavState:
+        """The feedback that took the live solution from (q0, v0, pos0) to its state now, applied
+        to the low-pass filter's memory, the stored past solutions and `nav`; return `nav`."""
+        st = live.ins.s
         if self._lowpass is not None:
             self._lowpass.shift(st.v_n - v0)
         history = live.history
@@ -333,7 +372,7 @@ class Matcher:
                 q = np.array(quat_mul_f(q_corr, floats(nav.q_nb)))
                 nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + dv, lat=nav.lat + dpos[0],
                                lon=nav.lon + dpos[1], h=nav.h + dpos[2])
-        return x_new, nav
+        return nav
 
 
 @kernel

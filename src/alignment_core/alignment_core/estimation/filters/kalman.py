@@ -130,15 +130,25 @@ class KalmanFilter(Counters):
             r = _ready(r, dt)
         if z.ndim == 0:                       # one measurement given as a scalar
             z = z.reshape(1)
+        x, p, y, s = self.arrays_to_update(z.shape[0])      # x, P, z, h, r are all in dt
+        try:
+            nis, accepted = kernels.update(x, p, z, h, r, _INF if gate_chi2 is None else gate_chi2, y, s)
+        except np.linalg.LinAlgError:           # S singular
+            nis, accepted = math.nan, False
+        return self.account(y, s, nis, accepted)
+
+    def arrays_to_update(self, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(x, P) as the filter's own C-ordered arrays and new arrays for y (m,) and S (m, m), for
+        a kernel that updates them in place as kalman_kernels.update does (estimation/
+        match_step.py); the caller then hands its outcome to `account`."""
         if self._x_out or self._p_out:
             self._own()
-        m = z.shape[0]
-        y, s = _empty(m, dt), _empty((m, m), dt)      # x, P, z, h, r are all in dt
-        try:
-            nis, accepted = kernels.update(self._x, self._P, z, h, r, _INF if gate_chi2 is None else gate_chi2,
-                                           y, s)
-        except np.linalg.LinAlgError:           # S singular
-            nis = math.nan
+        dt = self.dtype
+        return self._x, self._P, _empty(m, dt), _empty((m, m), dt)
+
+    def account(self, y: np.ndarray, s: np.ndarray, nis: float, accepted: bool) -> UpdateResult:
+        """An update's outcome counted (NaN nis: S was singular or not finite; raises
+        np.linalg.LinAlgError unless 0 <= nis < inf)."""
         if not 0.0 <= nis < _INF:
             check_nis(nis)
         self.last_nis = nis

@@ -250,7 +250,7 @@ class VelocityMatching(ErrorModel):
     def feedback(self, x: np.ndarray, p: np.ndarray, m: Match, nav: NavState, corr: Corrections) -> np.ndarray:
         """C <- (I + [phi x]) C (exactly: exp([phi x]) C), V <- V - dV, biases accumulate;
         the master's attitude error is not fed back (it is the master's)."""
-        nav.q_nb, nav.v_n, corr.bg, corr.ba, x_new = _feedback(
+        nav.q_nb, nav.v_n, corr.bg, corr.ba, x_new = feedback_k(
             as_float64(nav.q_nb), as_float64(nav.v_n), as_float64(corr.bg), as_float64(corr.ba), as_float64(x))
         return x_new
 
@@ -261,12 +261,12 @@ class VelocityMatching(ErrorModel):
     def misalignment(self, x, p, m: Match, nav: NavState, corr: Corrections):
         """log((C_m c_nom)^T C_a) with, for vm15, C_m corrected by phi_m (C_m = (I + [phi_m x]) C_m,est)
         and the sigma of phi - phi_m."""
-        return _misalignment(as_float64(nav.q_nb), np.ascontiguousarray(nominal_attitude(m), dtype=np.float64),
+        return misalignment_k(as_float64(nav.q_nb), np.ascontiguousarray(nominal_attitude(m), dtype=np.float64),
                              as_float64(x), p, self._n == 15)
 
 
 @kernel
-def _feedback(q_nb, v_n, bg, ba, x):
+def feedback_k(q_nb, v_n, bg, ba, x):
     """VelocityMatching.feedback compiled: (q_nb turned by phi = x[0:3] (rotate_attitude),
     v_n - x[3:6], bg + x[6:9], ba + x[9:12], the state kept: zero but x[12:]); float64 operands
     (a float32 state taken exactly, as numpy promotes it)."""
@@ -276,7 +276,7 @@ def _feedback(q_nb, v_n, bg, ba, x):
 
 
 @kernel
-def _misalignment(q_nb, c_m, x, p, master_states):
+def misalignment_k(q_nb, c_m, x, p, master_states):
     """VelocityMatching.misalignment compiled: q_nb (4,), C_m c_nom (3, 3), x (n,) float64,
     P (n, n) in the filter's dtype (p_rel is formed in it); master_states: x[12:15] is phi_m."""
     c_na = np.array(quat_to_dcm_k((q_nb[0], q_nb[1], q_nb[2], q_nb[3]))).reshape(3, 3)
