@@ -35,6 +35,7 @@ def strapdown_and_predict(ins: Strapdown, kf: KalmanFilter, cells: tuple[np.ndar
                       as_float64(s.prev_dtheta), as_float64(s.prev_dv), as_float64(s.q_nb), as_float64(s.v_n),
                       float(s.lat), float(s.lon), float(s.h), idx, n, x, p, qd,
                       _NO_SPOT if a_spot is None else as_float64(a_spot), a_spot is not None)
+    kf.n_predicts += 1
     return f_model, phi
 
 

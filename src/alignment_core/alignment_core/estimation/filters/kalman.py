@@ -109,10 +109,9 @@ class KalmanFilter(Counters):
 
     def arrays_to_predict(self) -> tuple[np.ndarray, np.ndarray]:
         """(x, P) as the filter's own C-ordered arrays, for a compiled step that predicts them in
-        place as `predict` does (estimation/propagation_step.py); counted as a predict."""
+        place as `predict` does (estimation/propagation_step.py; it counts the predict once done)."""
         if self._x_out or self._p_out:
             self._own()
-        self.n_predicts += 1
         return self._x, self._P
 
     def _innovation(self, z, h, r, x, p):

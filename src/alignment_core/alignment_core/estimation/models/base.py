@@ -266,7 +266,12 @@ class ModelWrapper(ErrorModel):
 
     def transition_cells(self) -> tuple[np.ndarray, int] | None:
         """The base's: a wrapper's Phi is its base's, grown by identity rows (an augmented model's
-        appended constants, or ErrorModel.transition_in's)."""
+        appended constants, or ErrorModel.transition_in's); None for a wrapper that computes Phi
+        its own way."""
+        cls = type(self)
+        if cls.transition not in (ModelWrapper.transition, AugmentedModel.transition) \
+                or cls.transition_in not in (ErrorModel.transition_in, AugmentedModel.transition_in):
+            return None
         return self.base.transition_cells()
 
     def process_noise(self, h: float) -> np.ndarray:

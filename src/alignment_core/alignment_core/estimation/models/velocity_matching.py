@@ -230,7 +230,11 @@ class VelocityMatching(ErrorModel):
     def transition_in(self, p: Propagation, n: int) -> np.ndarray:
         return transition(p.c_nb, p.f_n, p.w_ie, p.w_en, p.h, self._n, n)
 
-    def transition_cells(self) -> tuple[np.ndarray, int]:
+    def transition_cells(self) -> tuple[np.ndarray, int] | None:
+        """Its cells, unless a subclass computes Phi its own way."""
+        cls = type(self)
+        if cls.transition is not VelocityMatching.transition or cls.transition_in is not VelocityMatching.transition_in:
+            return None
         return fh_index(self._n), self._n
 
     def process_noise(self, h: float) -> np.ndarray:
