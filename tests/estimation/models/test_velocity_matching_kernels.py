@@ -103,3 +103,20 @@ def test_feedback_is_the_numpy_feedback(dtype, n):
         got = vm.feedback_k.py_func(q, v, bg, ba, x.astype(float))
         for a, b in zip(got, (nav.q_nb, nav.v_n, corr.bg, corr.ba, x_new)):
             assert _same(a, b)
+
+
+@pytest.mark.parametrize('n', [12, 15, 19])
+def test_measurement_is_the_velocity_identity_and_minus_u_cross(n):
+    """H (3, n): I at the velocity columns, -[u x] at columns 12-14 when the master's attitude
+    states are there (written out from the cross product here), zero elsewhere; the compiled
+    kernel equal to its interpreted form bit for bit, signed zeros included."""
+    rng = np.random.default_rng(n)
+    for u in [rng.standard_normal(3), np.array([0.0, -0.0, 1.5]), np.array([np.nan, 2.0, -np.inf])]:
+        h = vm.measurement(u, n)
+        want = np.zeros((3, n))
+        want[:, 3:6] = np.eye(3)
+        if n >= 15:
+            x, y, z = u
+            want[:, 12:15] = -np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+        np.testing.assert_array_equal(h, want)
+        assert _same(vm.measurement_k(u, n), vm.measurement_k.py_func(u, n))

@@ -18,7 +18,7 @@ from alignment_core.estimation.filters.kalman import KalmanFilter
 from alignment_core.estimation.filters.kalman_kernels import update
 from alignment_core.estimation.health import UNHEALTHY, NumericalBreakdownError, healthy
 from alignment_core.estimation.models.base import Corrections
-from alignment_core.estimation.models.velocity_matching import feedback_k, misalignment_k
+from alignment_core.estimation.models.velocity_matching import feedback_k, measurement_k, misalignment_k
 from alignment_core.navigation.strapdown import NavState
 
 _INF = float('inf')
@@ -59,19 +59,10 @@ def update_and_feed_back(kf: KalmanFilter, n: int, z: np.ndarray, u_n: np.ndarra
 
 @kernel
 def _match(x, p, z, u_n, n, r, gate, y, s, q_nb, v_n, bg, ba, c_nominal):
-    """The update (x, P, y, S in place) with H of velocity matching (velocity_matching.measurement);
+    """The update (x, P, y, S in place) with velocity matching's H of n states (measurement_k);
     (nis, accepted, healthy, then, if both, x before feedback, q_nb, v_n, bg, ba and the state
     kept after it, mu, sigma; else empty arrays)."""
-    h = np.zeros((3, x.shape[0]))
-    h[0, 3] = 1.0
-    h[1, 4] = 1.0
-    h[2, 5] = 1.0
-    if n >= 15:                          # -[u x] at column 12
-        ux, uy, uz = u_n[0], u_n[1], u_n[2]
-        h[0, 13], h[0, 14] = uz, -uy
-        h[1, 12], h[1, 14] = -uz, ux
-        h[2, 12], h[2, 13] = uy, -ux
-    nis, accepted = update(x, p, z, h, r, gate, y, s)
+    nis, accepted = update(x, p, z, measurement_k(u_n, n), r, gate, y, s)
     ok = healthy(x, p)
     if not (accepted and ok):
         e = np.empty(0)

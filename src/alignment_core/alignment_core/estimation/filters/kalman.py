@@ -129,23 +129,16 @@ class KalmanFilter(Counters):
             r = _ready(r, dt)
         if z.ndim == 0:                       # one measurement given as a scalar
             z = z.reshape(1)
-        if self._x_out or self._p_out:        # arrays_to_update's and account's lines, inline (the calls
-            self._own()                        # would cost a few percent of a bare update)
+        if self._x_out or self._p_out:
+            self._own()
         m = z.shape[0]
         y, s = _empty(m, dt), _empty((m, m), dt)      # x, P, z, h, r are all in dt
         try:
             nis, accepted = kernels.update(self._x, self._P, z, h, r, _INF if gate_chi2 is None else gate_chi2,
                                            y, s)
         except np.linalg.LinAlgError:           # S singular
-            nis = math.nan
-        if not 0.0 <= nis < _INF:
-            check_nis(nis)
-        self.last_nis = nis
-        if not accepted:
-            self.n_gated += 1
-            return UpdateResult(y, s, nis, False)
-        self.n_updates += 1
-        return UpdateResult(y, s, nis, True)
+            nis, accepted = math.nan, False
+        return self.account(y, s, nis, accepted)
 
     def arrays_to_update(self, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(x, P) as the filter's own C-ordered arrays and new arrays for y (m,) and S (m, m), for

@@ -43,10 +43,8 @@ from alignment_core.estimation.models.base import (
     relative_misalignment_k,
 )
 from alignment_core.geometry.rotations import (
-    floats,
     skew_cells,
     skew_into,
-    skew_values,
 )
 from alignment_core.geometry.rotations_compiled import quat_to_dcm_k, rotate_attitude_k, rotvec_to_dcm_k
 from alignment_core.navigation.strapdown import NavState
@@ -63,27 +61,25 @@ def labels(master_states: bool) -> tuple[str, ...]:
     return LABELS + MASTER_LABELS if master_states else LABELS
 
 
-def _h_index(n: int) -> np.ndarray:
-    """Flat indices of H's non-zero cells in a (3, n) array: the velocity identity, then -[u x]
-    at (0, 12) in skew_cells' order."""
-    return np.array([3, n + 4, 2 * n + 5] + [r * n + c for r, c in skew_cells(0, 12)])
-
-
-_H_INDEX: dict[int, np.ndarray] = {}
-
-
 def measurement(u_n: np.ndarray, n: int = N) -> np.ndarray:
     """H (3, n); for n >= 15 the master-attitude block (columns 12-14) is -[u x] with u the
     rotated lever-arm plus LDV velocity (nav frame), the columns after it zero (states appended to
-    vm15). Written with one put(): the cells of skew_values(-u)."""
-    if n == N:
-        return H
-    idx = _H_INDEX.get(n)
-    if idx is None:
-        idx = _H_INDEX[n] = _h_index(n)
-    x, y, z = floats(u_n)
+    vm15)."""
+    return H if n == N else measurement_k(as_float64(u_n), n)
+
+
+@kernel
+def measurement_k(u_n, n):
+    """measurement(u_n, n) compiled, for any n >= 12: u_n (3,) float64."""
     h = np.zeros((3, n))
-    h.put(idx, [1.0, 1.0, 1.0] + skew_values(-x, -y, -z))
+    h[0, 3] = 1.0
+    h[1, 4] = 1.0
+    h[2, 5] = 1.0
+    if n >= 15:                          # -[u x] at column 12
+        ux, uy, uz = u_n[0], u_n[1], u_n[2]
+        h[0, 13], h[0, 14] = uz, -uy
+        h[1, 12], h[1, 14] = -uz, ux
+        h[2, 12], h[2, 13] = uy, -ux
     return h
 
 
