@@ -1,10 +1,13 @@
-"""One master match of plain velocity matching compiled whole (estimation/match_step.py) against
-the calls it replaces, bit for bit: the model's measurement, KalmanFilter.update, check_health, the
-model's feedback and misalignment; accepted, gated, with a singular innovation covariance and
-with a broken covariance; and an engine run through it against the same run through the calls."""
+"""One master match of velocity matching and its delay and lever-arm layers compiled whole
+(estimation/match_step.py) against the calls it replaces, bit for bit: the model's measurement, a
+beam's projection, H Phi^-1, KalmanFilter.update, check_health, the model's feedback, the carry
+of the slave's past attitude (Matcher._carry) and the misalignment; accepted, gated, with a
+singular innovation covariance or Phi, with a broken covariance; and engine runs through it
+against the same runs through the calls."""
 from __future__ import annotations
 
 import dataclasses
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -14,40 +17,79 @@ from alignment_core import pipeline
 from alignment_core.config import scenario
 from alignment_core.estimation import matching
 from alignment_core.estimation.config import FilterConfig
+from alignment_core.estimation.filters.base import solve
 from alignment_core.estimation.filters.kalman import KalmanFilter
 from alignment_core.estimation.health import NumericalBreakdownError, check_health
-from alignment_core.estimation.match_step import _match, update_and_feed_back
+from alignment_core.estimation.match_step import Layers, _match, _measurement, layers_of, update_and_feed_back
 from alignment_core.estimation.models import Corrections, Match, make_model
-from alignment_core.estimation.models.base import nominal_attitude
+from alignment_core.estimation.models.beam import project_on_beam
+from alignment_core.estimation.models.lever_arm import LeverArmStates
+from alignment_core.estimation.models.master_delay import MasterDelayState
+from alignment_core.estimation.models.velocity_matching import VelocityMatching
 from alignment_core.navigation.strapdown import NavState
 
 C_NOM = np.array([[0.8, 0.6, 0.0], [-0.6, 0.8, 0.0], [0.0, 0.0, 1.0]])
+MODELS = {  # name: FilterConfig options
+    'vm15': {}, 'vm12': {'model': 'vm12'},
+    'vm15+delay+lever': {'master_delay_state': True, 'lever_arm_states': True},
+    'vm12+delay+lever': {'model': 'vm12', 'master_delay_state': True, 'lever_arm_states': True},
+    'vm15+delay': {'master_delay_state': True}, 'vm12+lever': {'model': 'vm12', 'lever_arm_states': True}}
 
 
-def _case(rng: np.random.Generator, n: int):
+def _nav(rng: np.random.Generator) -> NavState:
     q = rng.normal(size=4)
-    nav = NavState(q_nb=q / np.linalg.norm(q), v_n=rng.normal(size=3), lat=0.7, lon=0.2, h=10.0)
-    corr = Corrections(bg=rng.normal(size=3) * 1e-6, ba=rng.normal(size=3) * 1e-4)
+    return NavState(q_nb=q / np.linalg.norm(q), v_n=rng.normal(size=3), lat=0.7, lon=0.2, h=10.0)
+
+
+def _case(rng: np.random.Generator, n: int, extras: bool = False):
+    """A live solution, corrections, a filter of n states and a match (with the delay's w_n and
+    a_n if `extras`)."""
+    nav = _nav(rng)
+    corr = Corrections(bg=rng.normal(size=3) * 1e-6, ba=rng.normal(size=3) * 1e-4, dr=rng.normal(size=3) * 1e-2)
     a = rng.normal(size=(n, n)) * 1e-2
     p0 = a @ a.T + np.eye(n) * 1e-4
     c_m = np.linalg.qr(rng.normal(size=(3, 3)))[0]
     match = Match(c_m=c_m, w_m=rng.normal(size=3) * 0.02, r=rng.normal(size=3) * 10.0, u_n=rng.normal(size=3),
                   v_ref=rng.normal(size=3), z_vel=rng.normal(size=3) * 0.05, r_vel=np.eye(3) * 1e-4, ins=nav,
                   c_nom=C_NOM)
+    if extras:
+        match.w_n, match.a_n = rng.normal(size=3) * 0.02, rng.normal(size=3) * 0.3
     return nav, corr, KalmanFilter(rng.normal(size=n) * 1e-3, p0), match
 
 
-def _calls(model, kf, match, nav, corr, gate):
-    """What Matcher.update_master does for plain velocity matching, call by call."""
+def _past(rng: np.random.Generator, n: int) -> tuple[NavState, np.ndarray]:
+    """The slave a few steps back and Phi from there to now."""
+    return _nav(rng), np.eye(n) + rng.normal(size=(n, n)) * 1e-3
+
+
+def _calls(model, kf, match, nav, corr, gate, beam_n=None, past=None):
+    """What Matcher.update_master does, call by call; the slave's attitude at the validity time
+    after feedback is the past one carried as Matcher._carry carries it, else the live one."""
     meas = model.measurement(match, corr)
-    upd = kf.update(meas.z, meas.h, meas.r, gate)
+    if beam_n is not None:
+        meas = project_on_beam(meas, beam_n)
+    h = meas.h if past is None else solve(past[1].T, meas.h.T).T
+    upd = kf.update(meas.z, h, meas.r, gate)
     check_health(kf.x, kf.P)
     if not upd.accepted:
         return upd, None
     x = kf.x
     x_before, p = x.copy(), kf.P
+    q0, v0, pos0 = nav.q_nb, nav.v_n, (nav.lat, nav.lon, nav.h)
     x_kept = model.feedback(x, p, match, nav, corr)
-    return upd, (x_before, x_kept) + model.misalignment(x_kept, p, match, nav, corr)
+    at = nav
+    if past is not None:
+        live = SimpleNamespace(ins=SimpleNamespace(s=nav), history=SimpleNamespace(items=[], correct=lambda *a: None))
+        at = matching.Matcher._carry(SimpleNamespace(_lowpass=None), live, q0, v0, pos0, past[0])
+    return upd, (x_before, x_kept) + model.misalignment(x_kept, p, match, at, corr) + (at.q_nb,)
+
+
+def _one_call(model, kf, match, nav, corr, gate, beam_n=None, past=None):
+    layers = layers_of(model)
+    assert layers is not None
+    return update_and_feed_back(kf, layers, match.z_vel, match.u_n, match.r_vel, gate, nav, corr, match.c_m,
+                                match.c_nom, match.w_m, match.a_n, match.w_n, beam_n,
+                                None if past is None else past[0].q_nb, None if past is None else past[1])
 
 
 def _same(a, b) -> bool:
@@ -58,26 +100,57 @@ def _same(a, b) -> bool:
     return type(a) is type(b) and np.float64(a).tobytes() == np.float64(b).tobytes()
 
 
-@pytest.mark.parametrize('model_name', ['vm12', 'vm15'])
-@pytest.mark.parametrize('gate', [None, 1e6, 1e-9])
-def test_one_call_is_the_calls(model_name, gate):
-    """Twenty matches each way from the same state: the update's result, the filter's state and
-    counts, the fed-back solution and corrections, the misalignment; gated (gate 1e-9) nothing fed
-    back either way."""
-    model = make_model(FilterConfig(model=model_name))
+def test_layers_are_those_of_velocity_matching_only():
+    """Velocity matching with its delay and lever-arm layers has them, at the columns the layers
+    fill; any other model, or a subclass of a layer or of velocity matching, has none."""
+    cfg = FilterConfig()
+    assert layers_of(make_model(cfg)) == Layers(15)
+    assert layers_of(make_model(FilterConfig(model='vm12'))) == Layers(12)
+    assert layers_of(make_model(FilterConfig(master_delay_state=True, lever_arm_states=True))) == Layers(15, 15, 16)
+    assert layers_of(make_model(FilterConfig(model='vm12', lever_arm_states=True))) == Layers(12, -1, 12)
+    assert layers_of(LeverArmStates(MasterDelayState(LeverArmStates(VelocityMatching(cfg, True), 0.1), 0.1), 0.1)) \
+        is None
+    for name in ('seed003_24', 'seed002_10', 'seed000_6'):
+        assert layers_of(make_model(FilterConfig(model=name))) is None
+    assert layers_of(make_model(FilterConfig(rate_matching=True))) is None
+
+    class OwnRows(LeverArmStates):
+        pass
+
+    class OwnModel(VelocityMatching):
+        pass
+
+    assert layers_of(OwnRows(VelocityMatching(cfg, True), 0.1)) is None
+    assert layers_of(MasterDelayState(OwnModel(cfg, True), 0.1)) is None
+
+
+@pytest.mark.parametrize('model_name', list(MODELS))
+@pytest.mark.parametrize('where', ['live', 'past', 'beam', 'past+beam'])
+@pytest.mark.parametrize('gate', [None, 1e-9])
+def test_one_call_is_the_calls(model_name, where, gate):
+    """Twelve matches each way from the same state (the delay's inputs given or not): the
+    update's result, the filter's state and counts, the fed-back solution and corrections, the
+    misalignment and the attitude at the validity time; gated (gate 1e-9) nothing fed back."""
+    model = make_model(FilterConfig(**MODELS[model_name]))
     n = model.n
-    for seed in range(20):
-        nav_a, corr_a, kf_a, match_a = _case(np.random.default_rng(seed), n)
-        nav_b, corr_b, kf_b, match_b = _case(np.random.default_rng(seed), n)
-        want_upd, want = _calls(model, kf_a, match_a, nav_a, corr_a, gate)
-        got_upd, got = update_and_feed_back(kf_b, n, match_b.z_vel, match_b.u_n, match_b.r_vel, gate, nav_b,
-                                            corr_b, nominal_attitude(match_b))
+    for seed in range(12):
+        args = []
+        for _ in range(2):
+            rng = np.random.default_rng(seed)
+            nav, corr, kf, match = _case(rng, n, extras=seed % 3 > 0)
+            beam = rng.normal(size=3) if 'beam' in where else None
+            if beam is not None:
+                beam /= np.linalg.norm(beam)
+            args.append((model, kf, match, nav, corr, gate, beam, _past(rng, n) if 'past' in where else None))
+        want_upd, want = _calls(*args[0])
+        got_upd, got = _one_call(*args[1])
         for f in ('innovation', 's', 'nis', 'accepted'):
             assert _same(getattr(got_upd, f), getattr(want_upd, f)), f
         assert (got is None) == (want is None) == (gate == 1e-9)
         if got is not None:
             for g, w in zip(got, want):
                 assert _same(g, w)
+        (_, kf_a, _, nav_a, corr_a, *_), (_, kf_b, _, nav_b, corr_b, *_) = args
         assert _same(kf_b.x, kf_a.x) and _same(kf_b.P, kf_a.P)
         assert kf_b.diagnostics() == kf_a.diagnostics() and kf_b.last_nis == kf_a.last_nis
         for f in dataclasses.fields(NavState):
@@ -86,52 +159,82 @@ def test_one_call_is_the_calls(model_name, gate):
             assert _same(getattr(corr_b, f.name), getattr(corr_a, f.name)), f.name
 
 
-def test_a_singular_or_broken_update_raises_as_the_calls_do():
-    """S singular (R zero and P zero): np.linalg.LinAlgError, nothing fed back; a covariance
-    whose diagonal turns negative: NumericalBreakdownError after the update, nothing fed back."""
-    model = make_model(FilterConfig(model='vm15'))
-    for broken, error in ((lambda kf, m: (setattr(kf, 'P', np.zeros((15, 15))), setattr(m, 'r_vel', np.zeros((3, 3)))),
-                           np.linalg.LinAlgError),
-                          (lambda kf, m: kf.P.__setitem__((10, 10), -1.0), NumericalBreakdownError)):
-        nav_a, corr_a, kf_a, match_a = _case(np.random.default_rng(1), 15)
-        broken(kf_a, match_a)
-        with pytest.raises(error):
-            _calls(model, kf_a, match_a, nav_a, corr_a, None)
-        nav, corr, kf, match = _case(np.random.default_rng(1), 15)
-        broken(kf, match)
-        q0, bg0 = nav.q_nb, corr.bg
-        with pytest.raises(error):
-            update_and_feed_back(kf, 15, match.z_vel, match.u_n, match.r_vel, None, nav, corr,
-                                 nominal_attitude(match))
-        assert nav.q_nb is q0 and corr.bg is bg0              # nothing fed back
-        assert _same(nav_a.q_nb, q0) and _same(corr_a.bg, bg0)
-        assert kf.diagnostics() == kf_a.diagnostics() or (np.isnan(kf.last_nis) and np.isnan(kf_a.last_nis)
-                                                           and kf.n_updates == kf_a.n_updates
-                                                           and kf.n_gated == kf_a.n_gated)
-        assert _same(kf.x, kf_a.x) and _same(kf.P, kf_a.P)
+def _singular_s(kf, match, past):
+    kf.P = np.zeros_like(kf.P)
+    match.r_vel = np.zeros((3, 3))
+    return past
 
 
-def test_the_kernel_compiled_is_the_kernel_interpreted():
-    """The kernel's own code (the measurement matrix, the branches) compiled and interpreted."""
-    for n in (12, 15):
-        outs = []
-        for run in (_match, _match.py_func):
-            nav, corr, kf, match = _case(np.random.default_rng(4), n)
-            x, p, y, s = kf.arrays_to_update(3)
-            outs.append(run(x, p, match.z_vel, match.u_n, n, match.r_vel, np.inf, y, s, nav.q_nb, nav.v_n,
-                            corr.bg, corr.ba, np.ascontiguousarray(nominal_attitude(match))) + (x, p, y, s))
-        for a, b in zip(*outs):
-            assert _same(a, b)
+def _broken_p(kf, match, past):
+    kf.P[10, 10] = -1.0
+    return past
+
+
+def _singular_phi(kf, match, past):
+    return past[0], np.zeros_like(past[1])
+
+
+@pytest.mark.parametrize('broken, error', [(_singular_s, np.linalg.LinAlgError), (_broken_p, NumericalBreakdownError),
+                                           (_singular_phi, np.linalg.LinAlgError)])
+def test_a_singular_or_broken_update_raises_as_the_calls_do(broken, error):
+    """S singular (R zero and P zero) or Phi singular: np.linalg.LinAlgError, nothing fed back; a
+    covariance whose diagonal turns negative: NumericalBreakdownError after the update, nothing
+    fed back."""
+    model = make_model(FilterConfig(**MODELS['vm15+delay+lever']))
+    done = []
+    for call in (_calls, _one_call):
+        rng = np.random.default_rng(1)
+        nav, corr, kf, match = _case(rng, model.n, extras=True)
+        past = broken(kf, match, _past(rng, model.n))
+        q0, bg0, dr0 = nav.q_nb, corr.bg, corr.dr
+        with pytest.raises(error):
+            call(model, kf, match, nav, corr, None, None, past)
+        assert nav.q_nb is q0 and corr.bg is bg0 and corr.dr is dr0              # nothing fed back
+        done.append(kf)
+    kf_a, kf_b = done
+    assert kf_b.diagnostics() == kf_a.diagnostics() or (np.isnan(kf_b.last_nis) and np.isnan(kf_a.last_nis)
+                                                       and kf_b.n_updates == kf_a.n_updates
+                                                       and kf_b.n_gated == kf_a.n_gated)
+    assert _same(kf_b.x, kf_a.x) and _same(kf_b.P, kf_a.P)
+
+
+@pytest.mark.parametrize('model_name', ['vm12', 'vm15+delay+lever', 'vm12+delay+lever'])
+def test_the_kernels_compiled_are_the_kernels_interpreted(model_name):
+    """The kernels' own code (the measurement matrix, the layers' columns, the beam, the
+    branches) compiled and interpreted."""
+    model = make_model(FilterConfig(**MODELS[model_name]))
+    layers = layers_of(model)
+    assert layers is not None
+    n = model.n
+    outs = []
+    for run in (_match, _match.py_func):
+        rng = np.random.default_rng(4)
+        nav, corr, kf, match = _case(rng, n, extras=True)
+        past = _past(rng, n)
+        beam = np.array([0.6, 0.0, 0.8])
+        x, p, y, s = kf.arrays_to_update(1)
+        args = (match.z_vel, match.u_n, match.r_vel, layers.nb, n, layers.delay, layers.lever, match.c_m,
+                match.w_m, match.a_n, beam, past[1])
+        outs.append(run(x, p, y, s, match.z_vel, match.u_n, match.r_vel, np.inf, layers.nb, layers.delay,
+                        layers.lever, match.c_m, C_NOM, match.w_m, match.a_n, match.w_n, beam, past[1], nav.q_nb,
+                        nav.v_n, corr.bg, corr.ba, corr.dr, past[0].q_nb) + (x, p, y, s)
+                    + _measurement(*args) + _measurement.py_func(*args))
+    for a, b in zip(*outs):
+        assert _same(a, b)
 
 
 @pytest.mark.parametrize('name, options', [
     ('deck_paper', {}), ('catapult_paper', {}),
     ('deck_paper', {'filter.model': 'vm12', 'filter.gate_chi2': 3.0, 'filter.gate_release_updates': 3}),
-    ('deck_paper', {'filter.lever_arm_treatment': 'butterworth'})])
+    ('deck_paper', {'filter.lever_arm_treatment': 'butterworth'}), ('deck', {}), ('catapult', {}),
+    ('deck', {'ldv.mode': 'vector', 'filter.model': 'vm12', 'filter.master_delay_state': False,
+              'filter.gate_chi2': 3.0, 'filter.gate_release_updates': 3})])
 def test_an_engine_run_is_the_same_through_the_calls(name, options, monkeypatch):
     """Short runs of the papers' deck and catapult (plain vm15), of vm12 with a gate tight enough
-    to reject and release, and of the low-pass lever-arm treatment: every published estimate and
-    counter the same when the matcher takes the calls one by one."""
+    to reject and release, of the low-pass lever-arm treatment, of the carrier's deck and
+    catapult (the delay and lever-arm states, a beam LDV, matches in the slave's past) and of a
+    vector LDV with the lever arm on vm12: every published estimate and counter the same when the
+    matcher takes the calls one by one."""
     sc = scenario.load(name, {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0, **options}, seed=5)
     inp = pipeline.simulate(sc)
     calls = []
@@ -146,7 +249,7 @@ def test_an_engine_run_is_the_same_through_the_calls(name, options, monkeypatch)
 
     def one_by_one(self, *args, **kwargs):
         init(self, *args, **kwargs)
-        self._vm_states = 0
+        self._layers = None
 
     monkeypatch.setattr(matching.Matcher, '__init__', one_by_one)
     calls.clear()

@@ -18,11 +18,10 @@ from alignment_core.estimation.filters.base import NonlinearFilter, solve
 from alignment_core.estimation.filters.kalman import KalmanFilter
 from alignment_core.estimation.filters.lowpass import ButterworthLowPass
 from alignment_core.estimation.health import check_health
-from alignment_core.estimation.match_step import update_and_feed_back
+from alignment_core.estimation.match_step import layers_of, update_and_feed_back
 from alignment_core.estimation.models import Corrections, ErrorModel, Match, Measurement, Propagation
 from alignment_core.estimation.models.base import RateInputs
 from alignment_core.estimation.models.beam import project_on_beam
-from alignment_core.estimation.models.velocity_matching import VelocityMatching
 from alignment_core.estimation.outputs import Counters
 from alignment_core.estimation.reference_force import SpotAcceleration
 from alignment_core.geometry.rotations import cross3, floats, quat_mul_f, quat_to_dcm
@@ -105,7 +104,7 @@ class Matcher:
                  counters: Counters) -> None:
         self._cfg = cfg
         self._model = model
-        self._vm_states = model.n if type(model) is VelocityMatching else 0   # plain vm12 / vm15: match_step.py
+        self._layers = layers_of(model)      # velocity matching and its layers: match_step.py
         self._counters = counters
         self._compensate = cfg.lever_arm_treatment == 'compensation'
         self._r0 = np.asarray(cfg.lever_arm_m, dtype=float)
@@ -257,9 +256,9 @@ class Matcher:
         if self._lowpass is not None:
             z_vel = self._lowpass.step(z_vel)
         kf = live.kf
-        if self._vm_states and nav is live.ins.s and ref.beam_n is None and type(kf) is KalmanFilter \
-                and kf.dtype is FLOAT64:
-            self._update_compiled(live, kf, t_v, ref, z_vel, r_vel)
+        if self._layers is not None and type(kf) is KalmanFilter and kf.dtype is FLOAT64 \
+                and (phi_acc is None or phi_acc.dtype is FLOAT64):
+            self._update_compiled(live, kf, t_v, m, ref, z_vel, r_vel, past, extras)
             return
         match = Match(c_m=ref.c_m, w_m=m.w_b, r=ref.r, u_n=ref.u_n, v_ref=ref.v_ref, z_vel=z_vel,
                       r_vel=r_vel, ins=nav, c_nom=self.c_nom)
@@ -294,17 +293,22 @@ class Matcher:
         res.mu, res.mu_sigma = self._model.misalignment(x_new, p, match, nav, res.corr)
         res.t_mu = t_v
 
-    def _update_compiled(self, live: LiveSolution, kf: KalmanFilter, t_v: int, ref: Reference, z_vel: np.ndarray,
-                         r_vel: np.ndarray) -> None:
-        """update_master's update, feedback and misalignment for plain velocity matching under the
-        plain Kalman filter at the live solution's time, in one compiled call (match_step.py)."""
+    def _update_compiled(self, live: LiveSolution, kf: KalmanFilter, t_v: int, m: MasterSample, ref: Reference,
+                         z_vel: np.ndarray, r_vel: np.ndarray, past: Past, extras: Extras | None) -> None:
+        """update_master's measurement, update, feedback and misalignment for velocity matching
+        and its delay and lever-arm layers under the plain Kalman filter, in one compiled call
+        (match_step.py)."""
         res = self.results
         gate = self._gate_now()
-        res.dof = 3
+        res.dof = 3 if ref.beam_n is None else 1
         st = live.ins.s
+        nav, phi_acc = past
         q0, v0, pos0 = st.q_nb, st.v_n, (st.lat, st.lon, st.h)
-        upd, fed = update_and_feed_back(kf, self._vm_states, z_vel, ref.u_n, r_vel, gate, st, res.corr,
-                                        ref.c_m if self.c_nom is None else ref.c_m @ self.c_nom)
+        w_n, a_n = (None, None) if extras is None else extras[:2]
+        assert self._layers is not None
+        upd, fed = update_and_feed_back(kf, self._layers, z_vel, ref.u_n, r_vel, gate, st, res.corr, ref.c_m,
+                                        self.c_nom, m.w_b, a_n, w_n, ref.beam_n,
+                                        None if nav is st else nav.q_nb, phi_acc)
         res.nis = upd.nis
         if self._gated(upd.accepted, gate) or fed is None:
             return
@@ -312,9 +316,9 @@ class Matcher:
         res.innovation, res.innovation_cov = upd.innovation, upd.s
         res.x = fed.x
         live.history.prune(min(t_v, live.t_ns - self._doppler_lat_ns), live.t_ns)
-        self._carry(live, q0, v0, pos0, st)
+        self._carry(live, q0, v0, pos0, st)           # nav's attitude: fed.q_valid
         kf.x = fed.x_kept
-        res.anchor = (ref.c_m, st.q_nb)
+        res.anchor = (ref.c_m, fed.q_valid)
         res.mu, res.mu_sigma = fed.mu, fed.mu_sigma
         res.t_mu = t_v
 
