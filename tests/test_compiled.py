@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import pickle
 import subprocess
 import sys
 import time
@@ -138,3 +139,21 @@ def test_no_kernel_uses_a_numpy_reduction():
         src = inspect.getsource(k.py_func)
         for word in ('.sum(', 'np.sum', '.mean(', 'np.mean', 'norm(', '.prod(', 'np.add.reduce'):
             assert word not in src, f'{k.py_func.__qualname__} uses {word}'
+
+
+def test_an_array_with_an_unpickled_float64_descriptor_is_taken_as_float64():
+    """A cached kernel's new arrays carry a float64 descriptor unpickled from the cache: equal to
+    numpy's, another object. as_float64 and the filter's conversions take them as they are (no
+    copy), as they take numpy's own; a byte-swapped float64 is converted."""
+    from alignment_core.estimation.filters.base import as_dtype
+    from alignment_core.navigation.history_kernels import slave_between_k
+
+    unpickled = pickle.loads(pickle.dumps(compiled.FLOAT64))
+    assert unpickled == compiled.FLOAT64 and unpickled is not compiled.FLOAT64
+    a = np.arange(3.0).view(unpickled)
+    assert compiled.as_float64(a) is a and as_dtype(a, compiled.FLOAT64) is a
+    q = np.array([0.0, 0.0, 0.0, 1.0])
+    made = slave_between_k(q, q, 0.5, np.eye(2))[1]
+    assert compiled.as_float64(made) is made
+    swapped = np.arange(3.0).astype('>f8')
+    assert compiled.as_float64(swapped) is not swapped and compiled.as_float64(swapped).dtype == compiled.FLOAT64

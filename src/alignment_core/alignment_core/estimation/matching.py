@@ -257,7 +257,7 @@ class Matcher:
             z_vel = self._lowpass.step(z_vel)
         kf = live.kf
         if self._layers is not None and type(kf) is KalmanFilter and kf.dtype is FLOAT64 \
-                and (phi_acc is None or phi_acc.dtype is FLOAT64):
+                and (phi_acc is None or phi_acc.dtype == FLOAT64):
             self._update_compiled(live, kf, t_v, m, ref, z_vel, r_vel, past, extras)
             return
         match = Match(c_m=ref.c_m, w_m=m.w_b, r=ref.r, u_n=ref.u_n, v_ref=ref.v_ref, z_vel=z_vel,

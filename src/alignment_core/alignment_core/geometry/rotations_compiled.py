@@ -15,6 +15,7 @@ normalized_k = kernel(rotations.normalized_f)
 rotvec_to_quat_k = kernel(rotations.rotvec_to_quat_f)
 rotvec_to_dcm_k = kernel(rotations.rotvec_to_dcm_f)
 dcm_to_rotvec_k = kernel(rotations.dcm_to_rotvec_f)
+quat_to_rotvec_k = kernel(rotations.quat_to_rotvec_f)
 
 
 def rotate_attitude(q_nb: np.ndarray, phi: np.ndarray) -> np.ndarray:

@@ -28,19 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from alignment_core.geometry.rotations import Floats, floats, normalized_f, quat_mul_f, slerp
+from alignment_core.compiled import FLOAT64, as_float64
+from alignment_core.geometry.rotations import Floats, floats, normalized_f, quat_mul_f
+from alignment_core.navigation.history_kernels import ldv_between_k, slave_between_k
 from alignment_core.navigation.strapdown import NavState
 
-_EYES: dict[int, np.ndarray] = {}
-
-
-def _eye(n: int) -> np.ndarray:
-    """np.eye(n), cached (read only)."""
-    e = _EYES.get(n)
-    if e is None:
-        e = _EYES[n] = np.eye(n)
-        e.flags.writeable = False
-    return e
+_NO_PHI = np.empty((0, 0))
+_NONE = np.empty(0)
 
 
 @dataclass(slots=True)
@@ -96,23 +90,23 @@ class SlaveHistory:
                                  (it[k + 1].lat, it[k + 1].lon, it[k + 1].h)) if k + 1 < len(it)
                                 else (t_live_ns, live.q_nb, live.v_n, (live.lat, live.lon, live.h)))
         if t_ns == a.t_ns:
-            nav, f = a.nav(), 0.0
+            nav, phi_acc = a.nav(), a.phi
         elif b_t - a.t_ns > max_step_ns:
             return None
         else:
             f = (t_ns - a.t_ns) / (b_t - a.t_ns)
-            nav = NavState(q_nb=slerp(a.q_nb, b_q, f), v_n=a.v_n + f * (b_v - a.v_n),
+            q, cut = slave_between_k(as_float64(a.q_nb), as_float64(b_q), f, _NO_PHI if a.phi is None else a.phi)
+            nav = NavState(q_nb=q, v_n=a.v_n + f * (b_v - a.v_n),
                            lat=a.lat + f * (b_pos[0] - a.lat), lon=a.lon + f * (b_pos[1] - a.lon),
                            h=a.h + f * (b_pos[2] - a.h))
-        phi_acc = None
-        for j in range(k, len(it)):
+            phi_acc = None if a.phi is None else cut
+        if phi_acc is None:
+            return nav, None
+        for j in range(k + 1, len(it)):
             p = it[j].phi
             if p is None:
                 return nav, None
-            if j == k and f > 0.0:
-                eye = _eye(len(p))
-                p = eye + (1.0 - f) * (p - eye)
-            phi_acc = p if phi_acc is None else p @ phi_acc
+            phi_acc = p @ phi_acc
         return nav, phi_acc
 
     def correct(self, q_corr: Floats, dv: np.ndarray, dlat: float, dlon: float, dh: float) -> None:
@@ -150,6 +144,12 @@ def _beam_between(a: LdvRecord, b: LdvRecord, f: float) -> np.ndarray | None:
     return u / math.sqrt(u.dot(u))          # np.linalg.norm's numbers without its wrapper
 
 
+def _all_float64(r: LdvRecord) -> bool:
+    """Every array of r a float64 numpy array (the compiled interpolation's operands)."""
+    arrays = (r.v_s, r.disp) if r.beam is None else (r.v_s, r.disp, r.beam)
+    return all(type(a) is np.ndarray and a.dtype == FLOAT64 for a in arrays)
+
+
 class LdvHistory:
     """LDV samples by validity time, looked up at a master's validity time (module docstring).
 
@@ -168,8 +168,11 @@ class LdvHistory:
         self.sigma2 = float(sigma_mps) ** 2
         self.items: deque[LdvRecord] = deque()
         self.spacing_ns = 0                 # between the last two samples
+        self._float64 = True                # every sample recorded so far in float64: compiled interpolation
 
     def record(self, r: LdvRecord) -> None:
+        if self._float64 and not _all_float64(r):
+            self._float64 = False
         if self.items:
             self.spacing_ns = r.t_ns - self.items[-1].t_ns
         self.items.append(r)
@@ -197,6 +200,8 @@ class LdvHistory:
         span = b.t_ns - a.t_ns
         f = (t_ns - a.t_ns) / span
         if a.valid and b.valid:
+            if self._float64:
+                return self._between(k, a, b, t_ns, f)
             v = a.v_s + f * (b.v_s - a.v_s)
             disp = a.disp + 0.5 * (a.v_s + v) * ((t_ns - a.t_ns) * 1e-9) if b.moving else a.disp
             return LdvRecord(t_ns, v, True, b.moving, disp, self._kink_variance(k, f), _beam_between(a, b, f))
@@ -205,6 +210,19 @@ class LdvHistory:
                 if near.valid and abs(near.t_ns - t_ns) * 2 <= span:
                     return near
         return LdvRecord(t_ns, np.zeros(3), False, a.moving, a.disp)
+
+    def _between(self, k: int, a: LdvRecord, b: LdvRecord, t_ns: int, f: float) -> LdvRecord:
+        """The record the interpreted lines of `at` make between two valid samples, from one
+        compiled call (history_kernels.py; every sample so far in float64)."""
+        p = self.items[k - 1] if k > 0 else None
+        v_p, rho, threshold = _NONE, 0.0, 0.0
+        if p is not None and p.valid:
+            v_p, rho = p.v_s, (b.t_ns - a.t_ns) / (a.t_ns - p.t_ns)
+            threshold = 9.0 * 3.0 * (self.sigma2 * (1.0 + (1.0 + rho) ** 2 + rho ** 2))   # as _kink_variance
+        beam = a.beam is not None and b.beam is not None
+        v, disp, var, u = ldv_between_k(a.v_s, b.v_s, f, a.disp, (t_ns - a.t_ns) * 1e-9 if b.moving else -1.0,
+                                        v_p, rho, threshold, a.beam if beam else _NONE, b.beam if beam else _NONE)
+        return LdvRecord(t_ns, v, True, b.moving, disp if b.moving else a.disp, var, u if beam else None)
 
     def _kink_variance(self, k: int, f: float) -> float:
         """Interpolation error variance at the fraction f of [it[k], it[k+1]] (class docstring)."""

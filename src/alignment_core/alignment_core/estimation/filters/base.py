@@ -111,8 +111,8 @@ class Counters:
 
 def as_dtype(a, dtype: np.dtype) -> np.ndarray:
     """a as an ndarray of dtype (a native float64 or float32 descriptor, np.dtype(...)), without a
-    copy when it already is one (identity of the descriptors: numpy has one of each native type)."""
-    if type(a) is np.ndarray and a.dtype is dtype:
+    copy when it already is one."""
+    if type(a) is np.ndarray and a.dtype == dtype:
         return a
     return np.asarray(a, dtype=dtype)
 
