@@ -83,9 +83,10 @@ def cache_dir() -> Path:
 
 
 FLOAT64 = np.dtype(np.float64)
-"""numpy's native float64 descriptor. Test an array's dtype against it with ==, not `is`: an array
-a cached kernel made carries a descriptor numba unpickled from its cache, equal to this one but
-another object (== costs some 30 ns; a byte-swapped float64 is not equal and is converted)."""
+"""numpy's native float64 descriptor. An array's dtype is tested against it with `is`, then ==: an
+array a cached kernel made carries a descriptor numba unpickled from its cache, equal to this one
+but another object (identity is the cheaper test, equality the one that decides; a byte-swapped
+float64 is not equal and is converted)."""
 
 
 _NDARRAY = np.ndarray
@@ -93,7 +94,7 @@ _NDARRAY = np.ndarray
 
 def as_float64(a: Any) -> np.ndarray:
     """a as a float64 numpy array for a kernel (no copy when it is one already)."""
-    return a if type(a) is _NDARRAY and a.dtype == FLOAT64 else np.asarray(a, dtype=np.float64)
+    return a if type(a) is _NDARRAY and (a.dtype is FLOAT64 or a.dtype == FLOAT64) else np.asarray(a, dtype=np.float64)
 
 
 def as_float(a: Any) -> np.ndarray:

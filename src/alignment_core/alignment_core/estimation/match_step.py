@@ -80,7 +80,7 @@ class Fed(NamedTuple):
 
 def _matrix(a: np.ndarray) -> np.ndarray:
     """a as a C-ordered float64 array (no copy when it is one)."""
-    return a if type(a) is _NDARRAY and a.dtype == FLOAT64 and a.flags.c_contiguous \
+    return a if type(a) is _NDARRAY and (a.dtype is FLOAT64 or a.dtype == FLOAT64) and a.flags.c_contiguous \
         else np.ascontiguousarray(a, dtype=np.float64)
 
 

@@ -112,7 +112,7 @@ class Counters:
 def as_dtype(a, dtype: np.dtype) -> np.ndarray:
     """a as an ndarray of dtype (a native float64 or float32 descriptor, np.dtype(...)), without a
     copy when it already is one."""
-    if type(a) is np.ndarray and a.dtype == dtype:
+    if type(a) is np.ndarray and (a.dtype is dtype or a.dtype == dtype):
         return a
     return np.asarray(a, dtype=dtype)
 

@@ -21,7 +21,7 @@ def _ready(a, dtype: np.dtype) -> np.ndarray:
     """a in dtype, in one block of memory (C or Fortran order): a kernel's BLAS call would copy
     any other layout itself, with a performance warning. The methods test the usual case (the
     first line) inline before calling it: the call costs as much as the test."""
-    if type(a) is _NDARRAY and a.dtype == dtype and a.flags.c_contiguous:     # the usual case
+    if type(a) is _NDARRAY and (a.dtype is dtype or a.dtype == dtype) and a.flags.c_contiguous:     # the usual case
         return a
     a = as_dtype(a, dtype)
     flags = a.flags
@@ -100,9 +100,9 @@ class KalmanFilter(Counters):
         dt = self.dtype
         if self._x_out or self._p_out:
             self._own()
-        if not (type(phi) is _NDARRAY and phi.dtype == dt and phi.flags.c_contiguous):   # _ready's usual case inline
+        if not (type(phi) is _NDARRAY and (phi.dtype is dt or phi.dtype == dt) and phi.flags.c_contiguous):   # _ready
             phi = _ready(phi, dt)
-        if not (type(qd) is _NDARRAY and qd.dtype == dt and qd.flags.c_contiguous):
+        if not (type(qd) is _NDARRAY and (qd.dtype is dt or qd.dtype == dt) and qd.flags.c_contiguous):
             qd = _ready(qd, dt)
         kernels.predict(self._x, self._P, phi, qd)
         self.n_predicts += 1
@@ -121,11 +121,11 @@ class KalmanFilter(Counters):
     def update(self, z: np.ndarray, h: np.ndarray, r: np.ndarray,
                gate_chi2: float | None = None) -> UpdateResult:
         dt = self.dtype
-        if not (type(z) is _NDARRAY and z.dtype == dt and z.flags.c_contiguous):    # _ready's usual case inline
+        if not (type(z) is _NDARRAY and (z.dtype is dt or z.dtype == dt) and z.flags.c_contiguous):    # _ready inline
             z = _ready(z, dt)
-        if not (type(h) is _NDARRAY and h.dtype == dt and h.flags.c_contiguous):
+        if not (type(h) is _NDARRAY and (h.dtype is dt or h.dtype == dt) and h.flags.c_contiguous):
             h = _ready(h, dt)
-        if not (type(r) is _NDARRAY and r.dtype == dt and r.flags.c_contiguous):
+        if not (type(r) is _NDARRAY and (r.dtype is dt or r.dtype == dt) and r.flags.c_contiguous):
             r = _ready(r, dt)
         if z.ndim == 0:                       # one measurement given as a scalar
             z = z.reshape(1)
