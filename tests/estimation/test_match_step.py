@@ -33,7 +33,8 @@ MODELS = {  # name: FilterConfig options
     'vm15': {}, 'vm12': {'model': 'vm12'},
     'vm15+delay+lever': {'master_delay_state': True, 'lever_arm_states': True},
     'vm12+delay+lever': {'model': 'vm12', 'master_delay_state': True, 'lever_arm_states': True},
-    'vm15+delay': {'master_delay_state': True}, 'vm12+lever': {'model': 'vm12', 'lever_arm_states': True}}
+    'vm15+delay': {'master_delay_state': True}, 'vm12+lever': {'model': 'vm12', 'lever_arm_states': True},
+    'vm12+delay': {'model': 'vm12', 'master_delay_state': True}, 'vm15+lever': {'lever_arm_states': True}}
 
 
 def _nav(rng: np.random.Generator) -> NavState:
@@ -41,9 +42,10 @@ def _nav(rng: np.random.Generator) -> NavState:
     return NavState(q_nb=q / np.linalg.norm(q), v_n=rng.normal(size=3), lat=0.7, lon=0.2, h=10.0)
 
 
-def _case(rng: np.random.Generator, n: int, extras: bool = False):
-    """A live solution, corrections, a filter of n states and a match (with the delay's w_n and
-    a_n if `extras`)."""
+def _case(rng: np.random.Generator, n: int, extras: int = 0, c_nom: bool = True):
+    """A live solution, corrections, a filter of n states and a match: the delay's w_n and a_n
+    with extras 1, w_n alone with extras 2 (no spot acceleration known), neither with 0; the
+    nominal mounting C_NOM, or none."""
     nav = _nav(rng)
     corr = Corrections(bg=rng.normal(size=3) * 1e-6, ba=rng.normal(size=3) * 1e-4, dr=rng.normal(size=3) * 1e-2)
     a = rng.normal(size=(n, n)) * 1e-2
@@ -51,9 +53,10 @@ def _case(rng: np.random.Generator, n: int, extras: bool = False):
     c_m = np.linalg.qr(rng.normal(size=(3, 3)))[0]
     match = Match(c_m=c_m, w_m=rng.normal(size=3) * 0.02, r=rng.normal(size=3) * 10.0, u_n=rng.normal(size=3),
                   v_ref=rng.normal(size=3), z_vel=rng.normal(size=3) * 0.05, r_vel=np.eye(3) * 1e-4, ins=nav,
-                  c_nom=C_NOM)
+                  c_nom=C_NOM if c_nom else None)
+    w_n, a_n = rng.normal(size=3) * 0.02, rng.normal(size=3) * 0.3
     if extras:
-        match.w_n, match.a_n = rng.normal(size=3) * 0.02, rng.normal(size=3) * 0.3
+        match.w_n, match.a_n = w_n, (a_n if extras == 1 else None)
     return nav, corr, KalmanFilter(rng.normal(size=n) * 1e-3, p0), match
 
 
@@ -126,18 +129,20 @@ def test_layers_are_those_of_velocity_matching_only():
 
 @pytest.mark.parametrize('model_name', list(MODELS))
 @pytest.mark.parametrize('where', ['live', 'past', 'beam', 'past+beam'])
-@pytest.mark.parametrize('gate', [None, 1e-9])
+@pytest.mark.parametrize('gate', [None, 1e-9, 2.0])
 def test_one_call_is_the_calls(model_name, where, gate):
-    """Twelve matches each way from the same state (the delay's inputs given or not): the
-    update's result, the filter's state and counts, the fed-back solution and corrections, the
-    misalignment and the attitude at the validity time; gated (gate 1e-9) nothing fed back."""
+    """Twelve matches each way from the same state (the delay's inputs, both, w_n alone or
+    none; the nominal mounting or none): the update's result, the filter's state and counts, the
+    fed-back solution and corrections, the misalignment and the attitude at the validity time;
+    gated (gate 1e-9) nothing fed back; a gate of 2 takes some and rejects others."""
     model = make_model(FilterConfig(**MODELS[model_name]))
     n = model.n
+    outcomes = set()
     for seed in range(12):
         args = []
         for _ in range(2):
             rng = np.random.default_rng(seed)
-            nav, corr, kf, match = _case(rng, n, extras=seed % 3 > 0)
+            nav, corr, kf, match = _case(rng, n, extras=seed % 3, c_nom=seed % 4 != 3)
             beam = rng.normal(size=3) if 'beam' in where else None
             if beam is not None:
                 beam /= np.linalg.norm(beam)
@@ -146,7 +151,10 @@ def test_one_call_is_the_calls(model_name, where, gate):
         got_upd, got = _one_call(*args[1])
         for f in ('innovation', 's', 'nis', 'accepted'):
             assert _same(getattr(got_upd, f), getattr(want_upd, f)), f
-        assert (got is None) == (want is None) == (gate == 1e-9)
+        assert (got is None) == (want is None)
+        assert gate != 1e-9 or got is None
+        assert gate is not None or got is not None
+        outcomes.add(got is None)
         if got is not None:
             for g, w in zip(got, want):
                 assert _same(g, w)
@@ -157,6 +165,8 @@ def test_one_call_is_the_calls(model_name, where, gate):
             assert _same(getattr(nav_b, f.name), getattr(nav_a, f.name)), f.name
         for f in dataclasses.fields(Corrections):
             assert _same(getattr(corr_b, f.name), getattr(corr_a, f.name)), f.name
+    if gate == 2.0:
+        assert outcomes == {True, False}
 
 
 def _singular_s(kf, match, past):
@@ -184,7 +194,7 @@ def test_a_singular_or_broken_update_raises_as_the_calls_do(broken, error):
     done = []
     for call in (_calls, _one_call):
         rng = np.random.default_rng(1)
-        nav, corr, kf, match = _case(rng, model.n, extras=True)
+        nav, corr, kf, match = _case(rng, model.n, extras=1)
         past = broken(kf, match, _past(rng, model.n))
         q0, bg0, dr0 = nav.q_nb, corr.bg, corr.dr
         with pytest.raises(error):
@@ -207,9 +217,9 @@ def test_the_kernels_compiled_are_the_kernels_interpreted(model_name):
     assert layers is not None
     n = model.n
     outs = []
-    for run in (_match, _match.py_func):
+    for run, measure in ((_match, _measurement), (_match.py_func, _measurement.py_func)):
         rng = np.random.default_rng(4)
-        nav, corr, kf, match = _case(rng, n, extras=True)
+        nav, corr, kf, match = _case(rng, n, extras=1)
         past = _past(rng, n)
         beam = np.array([0.6, 0.0, 0.8])
         x, p, y, s = kf.arrays_to_update(1)
@@ -217,8 +227,8 @@ def test_the_kernels_compiled_are_the_kernels_interpreted(model_name):
                 match.w_m, match.a_n, beam, past[1])
         outs.append(run(x, p, y, s, match.z_vel, match.u_n, match.r_vel, np.inf, layers.nb, layers.delay,
                         layers.lever, match.c_m, C_NOM, match.w_m, match.a_n, match.w_n, beam, past[1], nav.q_nb,
-                        nav.v_n, corr.bg, corr.ba, corr.dr, past[0].q_nb) + (x, p, y, s)
-                    + _measurement(*args) + _measurement.py_func(*args))
+                        nav.v_n, corr.bg, corr.ba, corr.dr, past[0].q_nb) + (x, p, y, s) + measure(*args))
+    assert len(outs[0]) == len(outs[1]) == 20
     for a, b in zip(*outs):
         assert _same(a, b)
 

@@ -42,19 +42,28 @@ def _slave(rng: np.random.Generator, n: int, phi_dtype=np.float64) -> tuple[Slav
 
 
 def _state_at_interpreted(hist: SlaveHistory, t_ns: int, live: NavState, t_live: int):
-    """state_at's lines before the kernel: slerp, the numpy interpolations and the cut step's
-    I + (1 - f) (Phi - I) in numpy, then the product of the later steps' transitions."""
+    """state_at's lines before the kernel: at a snapshot's time its solution; between two, slerp,
+    the numpy interpolations and the cut step's I + (1 - f) (Phi - I) in numpy; then the product
+    of the later steps' transitions (None if a step has none)."""
     it = hist.items
     k = max(j for j in range(len(it)) if it[j].t_ns <= t_ns)
     a = it[k]
     b = it[k + 1] if k + 1 < len(it) else SimpleSnapshot(t_live, live)
     f = (t_ns - a.t_ns) / (b.t_ns - a.t_ns)
-    nav = NavState(q_nb=slerp(a.q_nb, b.q_nb, f), v_n=a.v_n + f * (b.v_n - a.v_n), lat=a.lat + f * (b.lat - a.lat),
-                   lon=a.lon + f * (b.lon - a.lon), h=a.h + f * (b.h - a.h))
-    eye = np.eye(len(a.phi))
-    phi_acc = eye + (1.0 - f) * (a.phi - eye)
-    for j in range(k + 1, len(it)):
-        phi_acc = it[j].phi @ phi_acc
+    if f == 0.0:
+        nav = a.nav()
+    else:
+        nav = NavState(q_nb=slerp(a.q_nb, b.q_nb, f), v_n=a.v_n + f * (b.v_n - a.v_n),
+                       lat=a.lat + f * (b.lat - a.lat), lon=a.lon + f * (b.lon - a.lon), h=a.h + f * (b.h - a.h))
+    phi_acc = None
+    for j in range(k, len(it)):
+        p = it[j].phi
+        if p is None:
+            return nav, None
+        if j == k and f > 0.0:
+            eye = np.eye(len(p))
+            p = eye + (1.0 - f) * (p - eye)
+        phi_acc = p if phi_acc is None else p @ phi_acc
     return nav, phi_acc
 
 
@@ -65,19 +74,23 @@ class SimpleSnapshot:
 
 @pytest.mark.parametrize('n, phi_dtype', [(15, np.float64), (19, np.float64), (15, np.float32)])
 def test_the_slave_between_two_steps_is_the_interpreted_one(n, phi_dtype):
-    """At 40 times between the snapshots and the live state: the attitude, velocity, position and
-    the transition to now the same bits as slerp and numpy give (a float32 Phi too)."""
+    """At 40 times between the snapshots and the live state and at each snapshot's own time: the
+    attitude, velocity, position and the transition to now the same bits as slerp and numpy give
+    (a float32 Phi too); with one step's transition missing, None for it from before that step."""
     rng = np.random.default_rng(n)
     hist, live, t_live = _slave(rng, n, phi_dtype)
-    for t in rng.integers(1, t_live, size=40):
-        t = int(t)
-        if t % (10 * MS) == 0:
+    times = [int(t) for t in rng.integers(1, t_live, size=40)] + [10 * MS * k for k in range(5)]
+    for t in times + [None] + times:
+        if t is None:                       # the second pass: the fourth step without its transition
+            hist.items[3].phi = None
             continue
         got_nav, got_phi = hist.state_at(t, live, t_live, 15 * MS)
         want_nav, want_phi = _state_at_interpreted(hist, t, live, t_live)
         for f in ('q_nb', 'v_n', 'lat', 'lon', 'h'):
             assert _same(getattr(got_nav, f), getattr(want_nav, f)), f
-        assert _same(got_phi, want_phi)
+        assert (got_phi is None and want_phi is None) or _same(got_phi, want_phi)
+        assert (got_phi is None) == (hist.items[3].phi is None and t < 40 * MS)
+    assert hist.state_at(15 * MS, live, t_live, 5 * MS) is None          # a step longer than allowed
 
 
 def _ldv(rng: np.random.Generator, beam: bool, dtype=np.float64) -> LdvHistory:
