@@ -21,10 +21,11 @@ otherwise load. The graph's launcher activates before it forks its nodes: the sl
 filter's kernels then find numba imported and its registries loaded (the first kernel call in a
 forked process 0.2 s of CPU without them, 0.02 s with).
 
-The machine code is cached on disk: the first process compiles (about 20 s for all kernels),
-the next ones load it. numba checks only a kernel's own source file for changes, not the files
-of the kernels it calls, so the cache lives in a directory named after a digest of this
-package's sources: any change to them compiles afresh. A process loads (or compiles) a kernel
+The machine code is cached on disk: the first process compiles (about 35 s for the kernels a
+`deck`, `deck_paper` and `catapult` run call), the next ones load it. numba checks only a
+kernel's own source file for changes, not the files of the kernels it calls, so the cache lives
+in a directory named after a digest of this package's sources: any change to them compiles
+afresh. A process loads (or compiles) a kernel
 on its first call: the filter node on its first message (about 0.2 s with the cache, once)."""
 from __future__ import annotations
 
