@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from support.estimates import digest
+from support.estimates import run_both_ways
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
@@ -247,21 +247,8 @@ def test_an_engine_run_is_the_same_through_the_calls(name, options, monkeypatch)
     matcher takes the calls one by one."""
     sc = scenario.load(name, {'duration_s': 12.0, 'aircraft.catapult.launch_time_s': 8.0, **options}, seed=5)
     inp = pipeline.simulate(sc)
-    calls = []
-    compiled = matching.update_and_feed_back
-    monkeypatch.setattr(matching, 'update_and_feed_back', lambda *a: calls.append(1) or compiled(*a))
-    filt = pipeline.align(sc, inp)
-    through_kernel = digest(filt)
-    assert len(calls) > 500
+    filt, calls = run_both_ways(monkeypatch, sc, inp, matching, 'update_and_feed_back', matching.Matcher,
+                                lambda m: setattr(m, '_layers', None))
+    assert calls > 500
     if 'filter.gate_chi2' in options:
         assert filt.counters.gated > 0 and filt.counters.gate_released > 0
-    init = matching.Matcher.__init__
-
-    def one_by_one(self, *args, **kwargs):
-        init(self, *args, **kwargs)
-        self._layers = None
-
-    monkeypatch.setattr(matching.Matcher, '__init__', one_by_one)
-    calls.clear()
-    assert digest(pipeline.align(sc, inp)) == through_kernel
-    assert not calls

@@ -25,8 +25,8 @@ The machine code is cached on disk: the first process compiles (about 35 s for t
 `deck`, `deck_paper` and `catapult` run call), the next ones load it. numba checks only a
 kernel's own source file for changes, not the files of the kernels it calls, so the cache lives
 in a directory named after a digest of this package's sources: any change to them compiles
-afresh. A process loads (or compiles) a kernel
-on its first call: the filter node on its first message (about 0.2 s with the cache, once)."""
+afresh. A process loads (or compiles) a kernel on its first call: the filter node on its first
+message (about 0.2 s with the cache, once)."""
 from __future__ import annotations
 
 import hashlib

@@ -218,7 +218,7 @@ class LdvHistory:
         v_p, rho, threshold = _NONE, 0.0, 0.0
         if p is not None and p.valid:
             v_p, rho = p.v_s, (b.t_ns - a.t_ns) / (a.t_ns - p.t_ns)
-            threshold = 9.0 * 3.0 * (self.sigma2 * (1.0 + (1.0 + rho) ** 2 + rho ** 2))   # as _kink_variance
+            threshold = self._kink_threshold(rho)
         beam = a.beam is not None and b.beam is not None
         v, disp, var, u = ldv_between_k(a.v_s, b.v_s, f, a.disp, (t_ns - a.t_ns) * 1e-9 if b.moving else -1.0,
                                         v_p, rho, threshold, a.beam if beam else _NONE, b.beam if beam else _NONE)
@@ -233,6 +233,10 @@ class LdvHistory:
             return 0.0
         rho = (b.t_ns - a.t_ns) / (a.t_ns - p.t_ns)
         delta = b.v_s - (1.0 + rho) * a.v_s + rho * p.v_s
-        noise = self.sigma2 * (1.0 + (1.0 + rho) ** 2 + rho ** 2)
-        excess = float(delta @ delta) - 9.0 * 3.0 * noise
+        excess = float(delta @ delta) - self._kink_threshold(rho)
         return excess * f * f if excess > 0.0 else 0.0
+
+    def _kink_threshold(self, rho: float) -> float:
+        """|Delta|^2 below which a kink is taken for noise: three sigma of Delta per axis, its
+        variance sigma^2 (1 + (1 + rho)^2 + rho^2) from the three samples it is made of."""
+        return 9.0 * 3.0 * (self.sigma2 * (1.0 + (1.0 + rho) ** 2 + rho ** 2))

@@ -117,11 +117,8 @@ def transition(c_nb: np.ndarray, f_n: np.ndarray, w_ie: np.ndarray, w_en: np.nda
     """Phi (n, n) over an interval h, from the mean attitude, specific force and rates: the
     compiled phi_from_cells (its numbers are those of `continuous(...) * h` written block by block);
     size > n: in the top-left of a (size, size) identity (states appended to the model)."""
-    idx = _FH_INDEX.get(n)
-    if idx is None:
-        idx = fh_index(n)
-    return phi_from_cells(as_float64(c_nb), as_float64(f_n), as_float64(w_ie), as_float64(w_en), float(h), idx, n,
-                       n if size is None else size)
+    return phi_from_cells(as_float64(c_nb), as_float64(f_n), as_float64(w_ie), as_float64(w_en), float(h),
+                          fh_index(n), n, n if size is None else size)
 
 
 @kernel
