@@ -11,6 +11,8 @@ Compiled and interpreted runs give the same numbers bit for bit (tests/test_comp
 A kernel uses no numpy reduction (sum, mean, norm, ...): numpy sums pairwise, numba in order,
 and the two round differently; a sum is written as the loop the interpreted code also runs.
 The interpreted form stays reachable as `f.py_func` (and everywhere under NUMBA_DISABLE_JIT=1).
+An array a kernel returns is built as numba builds it, with its Python type read from the
+function's environment rather than unpickled on each call (compiled_boxing.py).
 
 numba itself is imported on the first call of any kernel (or by `activate`), not with the
 package: a process that never runs one (a bag tool, a node started on its own that runs none)
@@ -160,9 +162,9 @@ def _make_dispatcher(k: Kernel) -> None:
 
 
 def activate() -> None:
-    """Import numba, load its typing and target registries, make every kernel's dispatcher and
-    rebind the module globals that name a Kernel to its dispatcher (a kernel calling another must
-    find a dispatcher)."""
+    """Import numba, register the project's array boxer (compiled_boxing.py), load numba's typing
+    and target registries, make every kernel's dispatcher and rebind the module globals that name
+    a Kernel to its dispatcher (a kernel calling another must find a dispatcher)."""
     global _active
     with _lock:             # one thread activates; the others wait for every dispatcher
         if _active:
@@ -170,7 +172,10 @@ def activate() -> None:
         import numba
         from numba.core.compiler_lock import global_compiler_lock
         from numba.core.registry import cpu_target
+
+        from alignment_core import compiled_boxing
         numba.config.CACHE_DIR = str(cache_dir())   # type: ignore[attr-defined]  # read when a dispatcher is made
+        compiled_boxing.install()
         with global_compiler_lock:                  # as numba itself refreshes (its typing context too)
             cpu_target.target_context.refresh()
         for call in _ON_NUMBA:

@@ -1,0 +1,101 @@
+"""alignment_core.compiled_boxing: an array a kernel returns is the array numba's own boxer builds,
+without its per-call unpickling, and the boxer is installed only under the numba it was written for."""
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from alignment_core import compiled, compiled_boxing
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _numba():
+    compiled.activate()
+    import numba
+    from numba.core import boxing, pythonapi, types
+    return numba, boxing, pythonapi._boxers.functions, types.Array
+
+
+def _returns(a, b):
+    """New arrays of each layout and several dtypes, views of an argument (b read-only), the
+    arguments themselves, empty arrays."""
+    c = a * 2.0
+    return (c, c.T, np.asfortranarray(c), a[1], a, b, (a[0, 0] + c)[:0], np.zeros(0, np.float32),
+            (a > 1.0), a.astype(np.complex128), np.arange(3), c.reshape(-1)[::2], b[1:])
+
+
+def _compile(boxer):
+    """_returns compiled (not cached) with `boxer` registered for arrays while it compiles."""
+    numba, _, boxers, array = _numba()
+    saved = boxers[array]
+    boxers[array] = boxer
+    try:
+        f = numba.njit(cache=False)(_returns)
+        a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
+        b.flags.writeable = False
+        f(a, b)
+    finally:
+        boxers[array] = saved
+    return f
+
+
+def test_installed_under_the_pinned_numba():
+    numba, _, boxers, array = _numba()
+    pin = re.search(r'^numba==(\S+)', (ROOT / 'requirements.txt').read_text(), re.M)
+    assert pin is not None and numba.__version__ == pin.group(1) == compiled_boxing.NUMBA_VERSION
+    assert boxers[array] is compiled_boxing._box_array
+    assert compiled_boxing.install()                          # again: already there
+
+
+def test_the_arrays_are_numbas_own():
+    """Against numba's boxer compiled in the same process: the same type, dtype, shape, strides,
+    flags, base and values for every kind of array a kernel returns, including the argument it
+    returns as itself and the read-only one it was given."""
+    _, boxing, _, _ = _numba()
+    ours, theirs = _compile(compiled_boxing._box_array), _compile(boxing.box_array)
+    a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
+    b.flags.writeable = False
+    got, want = ours(a, b), theirs(a, b)
+    assert len(got) == len(want) == 13
+    for g, w in zip(got, want):
+        assert type(g) is type(w) is np.ndarray
+        assert (g.dtype, g.shape, g.strides) == (w.dtype, w.shape, w.strides)
+        assert (g.flags.c_contiguous, g.flags.f_contiguous, g.flags.writeable, g.flags.owndata) == \
+            (w.flags.c_contiguous, w.flags.f_contiguous, w.flags.writeable, w.flags.owndata)
+        assert type(g.base) is type(w.base)
+        np.testing.assert_array_equal(g, w)
+    assert got[4] is a and got[5] is b and not got[5].flags.writeable      # arguments come back as themselves
+    assert not got[12].flags.writeable                                      # a view of a read-only one is read-only
+
+
+def test_the_type_is_borrowed_not_taken_or_dropped():
+    """The C function only reads the type: many calls leave np.ndarray's reference count as it was
+    (a reference dropped per call would free the type; one taken per call would leak)."""
+    ours = _compile(compiled_boxing._box_array)
+    a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
+    ours(a, b)
+    before = sys.getrefcount(np.ndarray)
+    for _ in range(2000):
+        ours(a, b)
+    assert abs(sys.getrefcount(np.ndarray) - before) < 50
+
+
+@pytest.mark.parametrize('case', ['version', 'foreign boxer'])
+def test_not_installed_over_another_numba_or_another_boxer(case, monkeypatch):
+    numba, boxing, boxers, array = _numba()
+    if case == 'version':
+        monkeypatch.setitem(boxers, array, boxing.box_array)
+        monkeypatch.setattr(numba, '__version__', '0.69.0')
+        expect = boxing.box_array
+    else:
+        def foreign(typ, val, c):
+            return boxing.box_array(typ, val, c)
+        monkeypatch.setitem(boxers, array, foreign)
+        expect = foreign
+    assert compiled_boxing.install() is False
+    assert boxers[array] is expect
