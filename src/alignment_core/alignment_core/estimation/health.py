@@ -7,7 +7,9 @@ import math
 
 import numpy as np
 
-from alignment_core.compiled import kernel
+from alignment_core.compiled import FLOAT64, kernel
+
+_NDARRAY = np.ndarray
 
 OK, WARN, ERROR = 0, 1, 2          # DiagnosticStatus.OK / WARN / ERROR
 LEVEL_NAMES = ('OK', 'WARN', 'ERROR')
@@ -20,7 +22,7 @@ def finite(*arrays: np.ndarray) -> bool:
     anything else by numpy."""
     t = 0.0
     for a in arrays:
-        if type(a) is np.ndarray and a.dtype.char in 'fd':
+        if type(a) is _NDARRAY and (a.dtype is FLOAT64 or a.dtype.char in 'fd'):     # float64 first: cheaper
             if a.ndim == 1 and a.size <= 16:
                 t += sum(a.tolist())
             elif not all_finite(a):
