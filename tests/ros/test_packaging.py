@@ -31,6 +31,7 @@ PYTHON_KEYS = {
     'numpy': 'python3-numpy',
     'scipy': 'python3-scipy',
     'numba': 'python3-numba',
+    'llvmlite': 'python3-numba',        # numba's code generator, installed with it (compiled_boxing.py)
     'yaml': 'python3-yaml',
     'matplotlib': 'python3-matplotlib',
     'tqdm': 'python3-tqdm',
