@@ -32,15 +32,17 @@ def _returns(a, b):
 def _compile(boxer):
     """_returns compiled (not cached) with `boxer` registered for arrays while it compiles."""
     numba, _, boxers, array = _numba()
-    saved = boxers[array]
-    boxers[array] = boxer
-    try:
-        f = numba.njit(cache=False)(_returns)
-        a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
-        b.flags.writeable = False
-        f(a, b)
-    finally:
-        boxers[array] = saved
+    from numba.core.compiler_lock import global_compiler_lock
+    with global_compiler_lock:              # no other thread compiles with the swapped boxer
+        saved = boxers[array]
+        boxers[array] = boxer
+        try:
+            f = numba.njit(cache=False)(_returns)
+            a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
+            b.flags.writeable = False
+            f(a, b)
+        finally:
+            boxers[array] = saved
     return f
 
 
