@@ -87,6 +87,94 @@ def test_the_type_is_borrowed_not_taken_or_dropped():
     assert abs(sys.getrefcount(np.ndarray) - before) < 50
 
 
+def test_every_array_is_released():
+    """The runtime's allocations and frees balance over many calls, the returned arrays dropped
+    (a boxer that kept the array's reference would leak its memory on every call)."""
+    from numba.core.runtime import _nrt_python, rtsys
+    ours = _compile(compiled_boxing._box_array)
+    a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
+    b.flags.writeable = False
+    was = _nrt_python.memsys_stats_enabled()
+    _nrt_python.memsys_enable_stats()
+    try:
+        before = rtsys.get_allocation_stats()
+        for _ in range(200):
+            out = ours(a, b)
+            del out
+        after = rtsys.get_allocation_stats()
+    finally:
+        if not was:
+            _nrt_python.memsys_disable_stats()
+    assert after.alloc - before.alloc >= 200 * 8                       # the new arrays were counted
+    assert after.alloc - before.alloc == after.free - before.free
+    assert after.mi_alloc - before.mi_alloc == after.mi_free - before.mi_free
+
+
+class Tagged(np.ndarray):
+    """An array subclass with a numba type of its own, whose box_type is this class."""
+    __numba_array_subtype_dispatch__ = True
+
+
+def _tagged_type():
+    """TaggedType (types.Array with box_type Tagged; its views keep the type), registered once."""
+    _numba()
+    from numba.core import types
+    from numba.core.datamodel.models import ArrayModel
+    from numba.core.extending import register_model, typeof_impl
+    from numba.np import numpy_support
+    if hasattr(Tagged, 'numba_type'):
+        return Tagged.numba_type
+
+    class TaggedType(types.Array):
+        def __init__(self, dtype, ndim, layout, readonly=False, aligned=True):
+            super().__init__(dtype, ndim, layout, readonly=readonly, aligned=aligned,
+                             name=f'Tagged({dtype}, {ndim}, {layout}, {readonly})')
+
+        def copy(self, dtype=None, ndim=None, layout=None, readonly=None):
+            return TaggedType(self.dtype if dtype is None else dtype, self.ndim if ndim is None else ndim,
+                              self.layout if layout is None else layout,
+                              not self.mutable if readonly is None else readonly)
+
+        @property
+        def box_type(self):
+            return Tagged
+
+    @typeof_impl.register(Tagged)
+    def _typeof(val, c):
+        return TaggedType(numpy_support.from_dtype(val.dtype), val.ndim, numpy_support.map_layout(val),
+                          readonly=not val.flags.writeable)
+
+    register_model(TaggedType)(ArrayModel)
+    Tagged.numba_type = TaggedType
+    return TaggedType
+
+
+def _reversed(a):
+    return a[::-1]
+
+
+def test_the_python_type_is_the_numba_types_box_type():
+    """A view of a Tagged argument is a new array object of type Tagged, from both boxers: the type
+    the boxer reads from the environment is the numba type's box_type, not always np.ndarray."""
+    numba, boxing, boxers, array = _numba()
+    from numba.core.compiler_lock import global_compiler_lock
+    _tagged_type()
+    a = np.arange(4.0).view(Tagged)
+    got = {}
+    for name, boxer in (('ours', compiled_boxing._box_array), ('numba', boxing.box_array)):
+        with global_compiler_lock:
+            saved = boxers[array]
+            boxers[array] = boxer
+            try:
+                f = numba.njit(cache=False)(_reversed)
+                got[name] = f(a)
+            finally:
+                boxers[array] = saved
+    for r in got.values():
+        assert type(r) is Tagged and r is not a and np.shares_memory(r, a)
+        np.testing.assert_array_equal(r, [3.0, 2.0, 1.0, 0.0])
+
+
 @pytest.mark.parametrize('case', ['version', 'foreign boxer'])
 def test_not_installed_over_another_numba_or_another_boxer(case, monkeypatch):
     numba, boxing, boxers, array = _numba()

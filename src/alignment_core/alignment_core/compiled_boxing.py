@@ -2,14 +2,18 @@
 Python type read from the function's environment instead of unpickled on every call.
 
 numba 0.68 builds the ndarray it returns with NRT_adapt_ndarray_to_python_acqref, passing the
-array's dtype and its Python type (np.ndarray, or the subclass the kernel was given). It keeps
-the dtype among the function's environment constants, read by a C load, but embeds the type as a
-pickle that numba_unpickle turns back into the object on every call: a call into the interpreter
-(a memo lookup) for each array returned. A kernel returning new 3-vectors hands each back in
-0.15 us instead of 0.37 us (docs/speed.md). `install` registers a boxer that keeps
-the type among the environment constants too, as numba keeps the dtype: the same C function, the
-same arguments, the same array (the function only reads the type: a borrowed reference is what
-it needs). The arithmetic is untouched; only what a kernel's return costs changes.
+array's dtype and its Python type (the numba type's `box_type`: np.ndarray, unless an array
+subclass registers a numba type of its own). It keeps the dtype among the function's environment
+constants, read from that list in C, but embeds the type as a pickle that numba_unpickle turns
+back into the object on every call: a call into the interpreter (a memo lookup) for each array
+returned, whose new reference to the type is never released. A kernel returning new 3-vectors
+hands each back in 0.15 us instead of 0.37 us (docs/speed.md). `install` registers a boxer that
+keeps the type among the environment constants too, as numba keeps the dtype: the same C
+function, the same arguments, the same array (the function only reads the type: a borrowed
+reference is what it needs, and none leaks). The arithmetic is untouched; only what a kernel's
+return costs changes. Compiled code keeps the boxer it was compiled with: a cache written before
+(in a user's NUMBA_CACHE_DIR; the package's own cache directory is named by its sources' digest)
+still returns arrays numba's way.
 
 It is installed only under the numba it was written against (`NUMBA_VERSION`, the version
 requirements.txt pins) and only over numba's own boxer; any other numba keeps its own."""
