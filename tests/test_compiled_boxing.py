@@ -29,18 +29,24 @@ def _returns(a, b):
             (a > 1.0), a.astype(np.complex128), np.arange(3), c.reshape(-1)[::2], b[1:])
 
 
-def _compile(boxer):
-    """_returns compiled (not cached) with `boxer` registered for arrays while it compiles."""
+def _args() -> tuple[np.ndarray, np.ndarray]:
+    """_returns' arguments: a (2, 3) and a read-only b (4,)."""
+    a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
+    b.flags.writeable = False
+    return a, b
+
+
+def _compile(boxer, fn=_returns, args=None):
+    """fn compiled (not cached, for the types of args, default _args()) with `boxer` registered
+    for arrays while it compiles."""
     numba, _, boxers, array = _numba()
     from numba.core.compiler_lock import global_compiler_lock
     with global_compiler_lock:              # no other thread compiles with the swapped boxer
         saved = boxers[array]
         boxers[array] = boxer
         try:
-            f = numba.njit(cache=False)(_returns)
-            a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
-            b.flags.writeable = False
-            f(a, b)
+            f = numba.njit(cache=False)(fn)
+            f(*(_args() if args is None else args))
         finally:
             boxers[array] = saved
     return f
@@ -60,8 +66,7 @@ def test_the_arrays_are_numbas_own():
     returns as itself and the read-only one it was given."""
     _, boxing, _, _ = _numba()
     ours, theirs = _compile(compiled_boxing._box_array), _compile(boxing.box_array)
-    a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
-    b.flags.writeable = False
+    a, b = _args()
     got, want = ours(a, b), theirs(a, b)
     assert len(got) == len(want) == 13
     for g, w in zip(got, want):
@@ -79,7 +84,7 @@ def test_the_type_is_borrowed_not_taken_or_dropped():
     """The C function only reads the type: many calls leave np.ndarray's reference count as it was
     (a reference dropped per call would free the type; one taken per call would leak)."""
     ours = _compile(compiled_boxing._box_array)
-    a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
+    a, b = _args()
     ours(a, b)
     before = sys.getrefcount(np.ndarray)
     for _ in range(2000):
@@ -92,8 +97,7 @@ def test_every_array_is_released():
     (a boxer that kept the array's reference would leak its memory on every call)."""
     from numba.core.runtime import _nrt_python, rtsys
     ours = _compile(compiled_boxing._box_array)
-    a, b = np.arange(6.0).reshape(2, 3), np.arange(4.0)
-    b.flags.writeable = False
+    a, b = _args()
     was = _nrt_python.memsys_stats_enabled()
     _nrt_python.memsys_enable_stats()
     try:
@@ -115,15 +119,16 @@ class Tagged(np.ndarray):
     __numba_array_subtype_dispatch__ = True
 
 
-def _tagged_type():
-    """TaggedType (types.Array with box_type Tagged; its views keep the type), registered once."""
+def _register_tagged() -> None:
+    """TaggedType (types.Array with box_type Tagged; its views keep the type) as Tagged's numba
+    type, registered once."""
     _numba()
     from numba.core import types
     from numba.core.datamodel.models import ArrayModel
     from numba.core.extending import register_model, typeof_impl
     from numba.np import numpy_support
     if hasattr(Tagged, 'numba_type'):
-        return Tagged.numba_type
+        return
 
     class TaggedType(types.Array):
         def __init__(self, dtype, ndim, layout, readonly=False, aligned=True):
@@ -146,7 +151,6 @@ def _tagged_type():
 
     register_model(TaggedType)(ArrayModel)
     Tagged.numba_type = TaggedType
-    return TaggedType
 
 
 def _reversed(a):
@@ -156,20 +160,11 @@ def _reversed(a):
 def test_the_python_type_is_the_numba_types_box_type():
     """A view of a Tagged argument is a new array object of type Tagged, from both boxers: the type
     the boxer reads from the environment is the numba type's box_type, not always np.ndarray."""
-    numba, boxing, boxers, array = _numba()
-    from numba.core.compiler_lock import global_compiler_lock
-    _tagged_type()
+    _, boxing, _, _ = _numba()
+    _register_tagged()
     a = np.arange(4.0).view(Tagged)
-    got = {}
-    for name, boxer in (('ours', compiled_boxing._box_array), ('numba', boxing.box_array)):
-        with global_compiler_lock:
-            saved = boxers[array]
-            boxers[array] = boxer
-            try:
-                f = numba.njit(cache=False)(_reversed)
-                got[name] = f(a)
-            finally:
-                boxers[array] = saved
+    got = {name: _compile(boxer, _reversed, (a,))(a)
+           for name, boxer in (('ours', compiled_boxing._box_array), ('numba', boxing.box_array))}
     for r in got.values():
         assert type(r) is Tagged and r is not a and np.shares_memory(r, a)
         np.testing.assert_array_equal(r, [3.0, 2.0, 1.0, 0.0])
