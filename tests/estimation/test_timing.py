@@ -58,7 +58,7 @@ def test_a_feedback_correction_commutes_with_interpolation():
     hist, live, t_live = _slave_history(w, a, 10 * MS, 4)
     q_corr, dv = rotvec_to_quat(np.array([1e-3, -2e-3, 5e-3])), np.array([0.01, -0.02, 0.03])
     before, _ = hist.state_at(13 * MS, live, t_live, 15 * MS)
-    hist.correct(q_corr, dv, 0.0, 0.0, 0.0)
+    hist.correct(np.array([0.0, 0.0, 0.0, 1.0]), q_corr, np.zeros(3), dv, 0.0, 0.0, 0.0)    # from the identity
     live_c = NavState(q_nb=quat_mul(q_corr, live.q_nb), v_n=live.v_n + dv, lat=live.lat, lon=live.lon, h=live.h)
     after, _ = hist.state_at(13 * MS, live_c, t_live, 15 * MS)
     expect = quat_mul(q_corr, before.q_nb)

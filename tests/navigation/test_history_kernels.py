@@ -9,9 +9,9 @@ import copy
 import numpy as np
 import pytest
 
-from alignment_core.geometry.rotations import slerp
+from alignment_core.geometry.rotations import floats, normalized_f, quat_mul_f, slerp
 from alignment_core.navigation.history import LdvHistory, LdvRecord, SlaveHistory
-from alignment_core.navigation.history_kernels import ldv_between_k, slave_between_k
+from alignment_core.navigation.history_kernels import carried_k, ldv_between_k, slave_between_k
 from alignment_core.navigation.strapdown import NavState
 
 MS = 1_000_000
@@ -105,6 +105,24 @@ def _ldv(rng: np.random.Generator, beam: bool, dtype=np.float64) -> LdvHistory:
     return h
 
 
+
+def test_a_correction_of_the_stored_solutions_is_the_interpreted_one():
+    """Each stored solution after `correct`: the attitude the float forms give (the nav-frame
+    rotation q1 q0^-1 times the stored attitude, renormalised), the velocity numpy's
+    v + (v1 - v0) gives and the position moved by the changes, the same bits."""
+    rng = np.random.default_rng(5)
+    hist, _, _ = _slave(rng, 15)
+    before = [(s.q_nb, s.v_n, s.lat, s.lon, s.h) for s in hist.items]
+    q0, q1, v0, v1 = _unit(rng, 4), _unit(rng, 4), rng.normal(size=3), rng.normal(size=3)
+    hist.correct(q0, q1, v0, v1, 1e-7, -2e-7, 0.3)
+    cx, cy, cz, cw = floats(q0)
+    q_corr = quat_mul_f(floats(q1), (-cx, -cy, -cz, cw))
+    for s, (q, v, lat, lon, h) in zip(hist.items, before, strict=True):
+        assert _same(s.q_nb, np.array(normalized_f(quat_mul_f(q_corr, floats(q)))))
+        assert _same(s.v_n, v + (v1 - v0))
+        assert (s.lat, s.lon, s.h) == (lat + 1e-7, lon + -2e-7, h + 0.3)
+
+
 @pytest.mark.parametrize('beam', [False, True])
 def test_the_ldv_between_two_samples_is_the_interpreted_one(beam):
     """At 60 times: every field of the record the same bits as the interpreted lines give (the
@@ -133,7 +151,11 @@ def test_a_float32_sample_keeps_the_interpreted_float32_interpolation():
 def test_the_kernels_compiled_are_the_kernels_interpreted():
     rng = np.random.default_rng(11)
     qa, qb, phi = _unit(rng, 4), _unit(rng, 4), np.eye(19) + rng.normal(size=(19, 19)) * 1e-3
-    for a, b in zip(slave_between_k(qa, qb, 0.3, phi), slave_between_k.py_func(qa, qb, 0.3, phi)):
+    va, vb = rng.normal(size=3), rng.normal(size=3)
+    for a, b in zip(slave_between_k(qa, qb, va, vb, 0.3, phi), slave_between_k.py_func(qa, qb, va, vb, 0.3, phi)):
+        assert _same(a, b)
+    args = (_unit(rng, 4), _unit(rng, 4), rng.normal(size=3), rng.normal(size=3), _unit(rng, 4), rng.normal(size=3))
+    for a, b in zip(carried_k(*args), carried_k.py_func(*args)):
         assert _same(a, b)
     args = (rng.normal(size=3), rng.normal(size=3), 0.4, rng.normal(size=3), 0.01, rng.normal(size=3), 1.0, 1e-5,
             _unit(rng, 3), _unit(rng, 3))

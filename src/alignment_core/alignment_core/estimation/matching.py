@@ -365,17 +365,16 @@ class Matcher:
         st = live.ins.s
         if self._lowpass is not None:
             self._lowpass.shift(st.v_n - v0)
-        history = live.history
-        if history.items or nav is not st:
+        if not live.history.items and nav is st:
+            return nav
+        dpos = (st.lat - pos0[0], st.lon - pos0[1], st.h - pos0[2])
+        live.history.correct(q0, st.q_nb, v0, st.v_n, *dpos)
+        if nav is not st:
             cx, cy, cz, cw = floats(q0)
             q_corr = quat_mul_f(floats(st.q_nb), (-cx, -cy, -cz, cw))     # floats: quat_mul(q, quat_conj(q0))
-            dv = st.v_n - v0
-            dpos = (st.lat - pos0[0], st.lon - pos0[1], st.h - pos0[2])
-            history.correct(q_corr, dv, *dpos)
-            if nav is not st:
-                q = np.array(quat_mul_f(q_corr, floats(nav.q_nb)))
-                nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + dv, lat=nav.lat + dpos[0],
-                               lon=nav.lon + dpos[1], h=nav.h + dpos[2])
+            q = np.array(quat_mul_f(q_corr, floats(nav.q_nb)))
+            nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + (st.v_n - v0), lat=nav.lat + dpos[0],
+                           lon=nav.lon + dpos[1], h=nav.h + dpos[2])
         return nav
 
 

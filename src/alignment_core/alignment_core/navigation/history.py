@@ -29,8 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from alignment_core.compiled import FLOAT64, as_float64
-from alignment_core.geometry.rotations import Floats, floats, normalized_f, quat_mul_f
-from alignment_core.navigation.history_kernels import ldv_between_k, slave_between_k
+from alignment_core.navigation.history_kernels import carried_k, ldv_between_k, slave_between_k
 from alignment_core.navigation.strapdown import NavState
 
 _NO_PHI = np.empty((0, 0))
@@ -95,8 +94,9 @@ class SlaveHistory:
             return None
         else:
             f = (t_ns - a.t_ns) / (b_t - a.t_ns)
-            q, cut = slave_between_k(as_float64(a.q_nb), as_float64(b_q), f, _NO_PHI if a.phi is None else a.phi)
-            nav = NavState(q_nb=q, v_n=a.v_n + f * (b_v - a.v_n),
+            q, v, cut = slave_between_k(as_float64(a.q_nb), as_float64(b_q), as_float64(a.v_n), as_float64(b_v), f,
+                                        _NO_PHI if a.phi is None else a.phi)
+            nav = NavState(q_nb=q, v_n=v,
                            lat=a.lat + f * (b_pos[0] - a.lat), lon=a.lon + f * (b_pos[1] - a.lon),
                            h=a.h + f * (b_pos[2] - a.h))
             phi_acc = None if a.phi is None else cut
@@ -109,13 +109,16 @@ class SlaveHistory:
             phi_acc = p @ phi_acc
         return nav, phi_acc
 
-    def correct(self, q_corr: Floats, dv: np.ndarray, dlat: float, dlon: float, dh: float) -> None:
-        """Apply a feedback correction (nav-frame rotation q_corr, velocity and position
-        changes) to every stored solution."""
-        qc = floats(q_corr)
+    def correct(self, q0: np.ndarray, q1: np.ndarray, v0: np.ndarray, v1: np.ndarray, dlat: float, dlon: float,
+                dh: float) -> None:
+        """Apply to every stored solution the feedback correction that took the live one from
+        attitude q0 (4,) and velocity v0 (3,) to q1 and v1: the nav-frame rotation q1 q0^-1, the
+        velocity change v1 - v0 and the position changes (one compiled call a solution)."""
+        if not self.items:
+            return
+        q0, q1, v0, v1 = as_float64(q0), as_float64(q1), as_float64(v0), as_float64(v1)
         for s in self.items:
-            s.q_nb = np.array(normalized_f(quat_mul_f(qc, floats(s.q_nb))))
-            s.v_n = s.v_n + dv
+            s.q_nb, s.v_n = carried_k(q0, q1, v0, v1, as_float64(s.q_nb), as_float64(s.v_n))
             s.lat += dlat
             s.lon += dlon
             s.h += dh
