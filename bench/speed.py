@@ -232,6 +232,12 @@ def transport(graphs: list[dict]) -> dict:
     return {**cost, 'runs': runs}
 
 
+def interpreter() -> str:
+    """The Python version and the interpreter the venv was made from: builds of one version differ
+    in speed (a distribution's, optimised with profiles and at link time, against pyenv's default)."""
+    return f'Python {platform.python_version()}, {getattr(sys, "_base_executable", sys.executable)}'
+
+
 def cpu_model() -> str:
     """The processor's model name and clock from /proc/cpuinfo (platform.processor() without it,
     '' when neither says): machines of one kind differ in speed, so a table's stamp says which one
@@ -322,7 +328,7 @@ def main() -> None:
     if a.publish:
         args = shlex.join(sys.argv[1:])
         out = {'stamp': {'commit': version, 'date': time.strftime('%Y-%m-%d', time.gmtime()),
-                         'cpus': os.cpu_count(), 'cpu': cpu_model(), 'load_start': load0,
+                         'cpus': os.cpu_count(), 'cpu': cpu_model(), 'python': interpreter(), 'load_start': load0,
                          'load_end': os.getloadavg()[0],
                          'command': f'scripts/bench.sh speed {args}',
                          'settings': {k: v for k, v in vars(a).items() if k in SETTINGS}},

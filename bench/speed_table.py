@@ -170,7 +170,8 @@ def render(r: dict[str, Any]) -> str:
     lines += ['', f"Measured by `{s['command']}`"
               + (' (' + ', '.join(f'{k} {_setting(v)}' for k, v in settings.items()) + ')' if settings else '')
               + f" at commit `{s['commit']}`, {s['date']}, {s['cpus']} CPUs"
-              + (f" ({s['cpu']})" if s.get('cpu') else '') + f", load average {s['load_start']:.1f} "
+              + (f" ({s['cpu']})" if s.get('cpu') else '') + (f", {s['python']}" if s.get('python') else '')
+              + f", load average {s['load_start']:.1f} "
               f"at the start and {s['load_end']:.1f} at the end; ratios are only meaningful within one run."]
     return '\n'.join(lines) + '\n'
 

@@ -7,20 +7,32 @@ cd "$ROOT"
 VENV="$ROOT/.venv"
 STAMP="$VENV/.requirements.sha"
 
-# the interpreter is looked for only to make the venv (a pyenv shim alone takes ~0.1 s, on every
-# script's start)
+# The interpreter is looked for only to make the venv (a pyenv shim alone takes ~0.1 s, on every
+# script's start). The distribution's own first (/usr/bin): Debian and Ubuntu build it with
+# profile-guided and link-time optimisation, which an interpreter pyenv builds by default lacks,
+# and the engine runs about 10 % faster on it (docs/speed.md); it must be able to make a venv
+# (ensurepip: Debian's python3.11-venv). PYTHON=... chooses another.
+SYSTEM_PY=/usr/bin/python3.11
 if [ ! -x "$VENV/bin/python" ]; then
   PY="${PYTHON:-}"
   if [ -z "$PY" ]; then
-    for c in python3.11 python3; do
-      if command -v "$c" >/dev/null 2>&1 && "$c" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
+    for c in "$SYSTEM_PY" python3.11 python3; do
+      if command -v "$c" >/dev/null 2>&1 && "$c" -c 'import sys, ensurepip, venv; sys.exit(sys.version_info[:2] != (3, 11))' \
+          2>/dev/null; then
         PY="$c"; break
       fi
     done
   fi
-  [ -n "$PY" ] || { echo "setup.sh: Python 3.11 is required (ROS 2 Jazzy wheels are built for it)" >&2; exit 1; }
-  echo "setup.sh: creating $VENV"
+  [ -n "$PY" ] || { echo "setup.sh: Python 3.11 able to make a venv is required (ROS 2 Jazzy wheels are built for it)" >&2; exit 1; }
+  echo "setup.sh: creating $VENV with $(command -v "$PY")"
   "$PY" -m venv "$VENV"
+elif [ ! -e "$VENV/.interpreter-noted" ]; then      # an older venv on another interpreter: said once
+  if [ -x "$SYSTEM_PY" ] && [ "$(readlink -f "$VENV/bin/python")" != "$(readlink -f "$SYSTEM_PY")" ] \
+      && "$SYSTEM_PY" -c 'import ensurepip, venv' 2>/dev/null; then
+    echo "setup.sh: note: $VENV runs $(readlink -f "$VENV/bin/python"); $SYSTEM_PY is about 10 % faster" \
+         "(docs/speed.md): remove $VENV to have it made again with that one" >&2
+  fi
+  touch "$VENV/.interpreter-noted"
 fi
 want="$(sha256sum requirements.txt | cut -d' ' -f1)"
 have="$(cat "$STAMP" 2>/dev/null || true)"
