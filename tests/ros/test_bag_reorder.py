@@ -66,6 +66,43 @@ def test_a_silent_stream_holds_no_more_than_the_bound():
     assert [t for t, _, _ in out[900:]] == [5 * MS] + [i * MS for i in range(900, 1000)]
 
 
+
+def test_a_held_buffer_lets_a_stream_subscribed_late_come_out_in_order():
+    """A recorder still discovering holds the buffer: a stream added while held, whose first
+    message is older than what the other stream sent meanwhile, comes out in log-time order with
+    nothing late; without the hold the same arrivals release one message late."""
+    outs = {}
+    for hold in (True, False):
+        buf = ReorderBuffer(max_bytes=1 << 30)
+        buf.add_stream('ship')
+        buf.hold = hold
+        out = []
+        for k in range(5):                                  # the ship alone: 0-4 ms
+            buf.push('ship', k * MS, b'x')
+            out += [t for t, _, _ in buf.release()]
+        buf.add_stream('filter')                            # discovered now, its output lags
+        buf.push('filter', 1 * MS, b'y')
+        out += [t for t, _, _ in buf.release()]
+        buf.hold = False                                    # discovery settled
+        buf.push('ship', 5 * MS, b'x')
+        buf.push('filter', 5 * MS, b'y')
+        out += [t for t, _, _ in buf.release()] + [t for t, _, _ in buf.drain()]
+        outs[hold] = (out, buf.late)
+    assert outs[True] == ([0, 1 * MS, 1 * MS, 2 * MS, 3 * MS, 4 * MS, 5 * MS, 5 * MS], 0)
+    assert outs[False][1] == 1 and outs[False][0] != sorted(outs[False][0])
+
+
+def test_a_held_buffer_still_keeps_to_its_bound():
+    buf = ReorderBuffer(max_bytes=10 * (100 + ENTRY_OVERHEAD_B))
+    buf.add_stream('a')
+    buf.hold = True
+    released = []
+    for k in range(50):
+        buf.push('a', k * MS, b'z' * 100)
+        released += [t for t, _, _ in buf.release()]
+    assert len(buf) == 10 and released == [k * MS for k in range(40)]
+
+
 def test_the_bound_must_be_positive():
     with pytest.raises(ValueError):
         ReorderBuffer(0)
@@ -124,3 +161,21 @@ def test_the_writers_memory_does_not_grow_with_the_recording(tmp_path, monkeypat
         w.close()
     assert held[49_999] - held[10_000] < 64_000, held
     assert BagReader(tmp_path / 'bag').counts() == {'/a': 50_000, '/b': 49_950}
+
+
+def test_the_recorder_holds_its_bag_while_discovery_adds_topics():
+    """Held from a newly subscribed topic until DISCOVERY_SETTLE_S without another; never held
+    by a recorder that does not discover (its topics were all subscribed at its start)."""
+    from types import SimpleNamespace
+
+    from alignment_ros.recorder import DISCOVERY_SETTLE_S, Recorder
+
+    rec = object.__new__(Recorder)
+    rec.writer = SimpleNamespace(reorder=ReorderBuffer(1 << 20))
+    rec.last_new_topic = 100.0
+    held = []
+    for discovering, now in ((True, 100.0), (True, 100.0 + 0.5 * DISCOVERY_SETTLE_S),
+                             (True, 100.0 + DISCOVERY_SETTLE_S), (False, 100.0)):
+        rec.settle(discovering, now)
+        held.append(rec.writer.reorder.hold)
+    assert held == [True, True, False, False]

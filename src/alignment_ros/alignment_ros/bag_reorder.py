@@ -14,6 +14,11 @@ that never sends, or sends out of stamp order) can then deliver a message older 
 released: it is released at once (the file is then not in log-time order there; MCAP readers
 that read in log-time order use the chunk index and still get it in order) and counted as
 ``late``.
+
+A recorder that discovers its topics as they appear *holds* the buffer (``hold``) while new topics
+keep appearing: a stream it has not subscribed to yet cannot hold the watermark back, and its
+first messages may be older than those already released. Held, the buffer releases only what its
+bound forces out.
 """
 from __future__ import annotations
 
@@ -41,6 +46,7 @@ class ReorderBuffer:
         self.peak_messages = 0
         self.released_t = -1       # log time of the last message released
         self.late = 0              # messages released after a younger one
+        self.hold = False          # release only what the bound forces out (streams still appearing)
 
     def add_stream(self, stream: object) -> None:
         """A stream that holds the watermark back until its first message (idempotent)."""
@@ -67,8 +73,8 @@ class ReorderBuffer:
 
     def release(self) -> Iterator[tuple[int, object, bytes]]:
         """Yield (log time, stream, data) of every message older than the watermark, then the
-        oldest while the buffer is over its bound."""
-        mark = self._watermark()
+        oldest while the buffer is over its bound (only those while held)."""
+        mark = None if self.hold else self._watermark()
         heap = self._heap
         while heap and ((mark is not None and heap[0][0] < mark) or self.bytes > self.max_bytes):
             yield self._pop()

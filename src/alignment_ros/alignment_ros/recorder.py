@@ -71,6 +71,10 @@ NS = 1_000_000_000
 SPIN_TIMEOUT_S = 0.05
 FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed recorder keeps)
 PUBLISHERS_INTERVAL_S = 1.0  # the recorded topics' publishers are looked up this often
+DISCOVERY_SETTLE_S = 1.0
+"""While discovering, the bag's reorder buffer is held until no new topic appeared for this long
+(wall time): a topic subscribed late cannot hold back what was released before it, so its first
+messages could be older (the graph's nodes start within about a second of each other)."""
 TRIM_INTERVAL_S = 30.0  # freed heap (the reorder buffer's peaks) handed back to the OS this often
 WALL_STAMPED = ('/rosout', '/parameter_events')   # rcl stamps these with the wall clock
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # rmw's name of a node not yet discovered
@@ -109,6 +113,7 @@ class Recorder:
         self._endpoints_known: set[str] = set()
         self._unusable: set[str] = set()
         self._publisher_names: dict[str, dict[str, str]] = {}   # topic -> {endpoint GID: node}
+        self.last_new_topic = time.monotonic()     # when discovery last subscribed to a topic
         for topic, type_name in topics.items():
             self.subscribe(topic, type_name, STREAM)
 
@@ -142,7 +147,13 @@ class Recorder:
                 continue
             self.subscribe(topic, types[0], adapted_qos(pubs))
             n += 1
+        if n:
+            self.last_new_topic = time.monotonic()
         return n
+
+    def settle(self, discovering: bool, now: float) -> None:
+        """Hold the bag's reorder buffer while discovery may still add topics (DISCOVERY_SETTLE_S)."""
+        self.writer.reorder.hold = discovering and now - self.last_new_topic < DISCOVERY_SETTLE_S
 
     def pending_topics(self) -> list[str]:
         """Topics named on the command line that are not subscribed yet."""
@@ -259,7 +270,7 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str
           progress: Progress, reached: ProgressPublisher | None) -> tuple[str, dict[str, int] | None]:
     """Spin until an end condition; return (end reason, expected counts)."""
     interval = max(args.polling_interval, 1) / 1000.0
-    discovering = not args.no_discovery and (args.filter.discovers() or rec.pending_topics())
+    discovering = not args.no_discovery and (args.filter.discovers() or bool(rec.pending_topics()))
     next_poll = time.monotonic() + interval
     next_flush = time.monotonic() + FLUSH_INTERVAL_S
     next_publishers = next_trim = time.monotonic()
@@ -287,6 +298,7 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str
             rec.discover()
             discovering = args.filter.discovers() or bool(rec.pending_topics())
             next_poll = now + interval
+        rec.settle(discovering, now)
         if end_seen is None and rec.end_time_reached():
             end_seen = now
             print('recorder end-time reached', flush=True)
