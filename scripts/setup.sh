@@ -10,7 +10,7 @@ STAMP="$VENV/.requirements.sha"
 # The interpreter is looked for only to make the venv (a pyenv shim alone takes ~0.1 s, on every
 # script's start). The distribution's own first (/usr/bin): Debian and Ubuntu build it with
 # profile-guided and link-time optimisation, which an interpreter pyenv builds by default lacks,
-# and the engine runs about 10 % faster on it (docs/speed.md); it must be able to make a venv
+# and the engine takes about 9 % less time on it (docs/speed.md); it must be able to make a venv
 # (ensurepip: Debian's python3.11-venv). PYTHON=... chooses another.
 SYSTEM_PY=/usr/bin/python3.11
 if [ ! -x "$VENV/bin/python" ]; then
@@ -24,15 +24,15 @@ if [ ! -x "$VENV/bin/python" ]; then
     done
   fi
   [ -n "$PY" ] || { echo "setup.sh: Python 3.11 able to make a venv is required (ROS 2 Jazzy wheels are built for it)" >&2; exit 1; }
-  echo "setup.sh: creating $VENV with $(command -v "$PY")"
-  "$PY" -m venv "$VENV"
+  echo "setup.sh: creating $VENV with $("$PY" -c 'import sys; print(sys.executable)')"
+  "$PY" -m venv "$VENV" || { rm -rf "$VENV"; echo "setup.sh: $PY could not make a venv" >&2; exit 1; }
 elif [ ! -e "$VENV/.interpreter-noted" ]; then      # an older venv on another interpreter: said once
   if [ -x "$SYSTEM_PY" ] && [ "$(readlink -f "$VENV/bin/python")" != "$(readlink -f "$SYSTEM_PY")" ] \
       && "$SYSTEM_PY" -c 'import ensurepip, venv' 2>/dev/null; then
-    echo "setup.sh: note: $VENV runs $(readlink -f "$VENV/bin/python"); $SYSTEM_PY is about 10 % faster" \
+    echo "setup.sh: note: $VENV runs $(readlink -f "$VENV/bin/python"); $SYSTEM_PY runs the engine in about 9 % less time" \
          "(docs/speed.md): remove $VENV to have it made again with that one" >&2
   fi
-  touch "$VENV/.interpreter-noted"
+  touch "$VENV/.interpreter-noted" 2>/dev/null || true
 fi
 want="$(sha256sum requirements.txt | cut -d' ' -f1)"
 have="$(cat "$STAMP" 2>/dev/null || true)"

@@ -67,6 +67,39 @@ def test_a_feedback_correction_commutes_with_interpolation():
     np.testing.assert_allclose(after.v_n, before.v_n + dv, rtol=0, atol=1e-15)
 
 
+
+def test_the_matchers_carry_is_the_float_forms_bit_for_bit():
+    """Matcher._carry after a feedback took the live solution from (q0, v0, pos0) to its state
+    now: every stored solution and a past one (`nav`) corrected by the nav-frame rotation q q0^-1
+    (the stored ones renormalised by the float forms, `nav` by numpy), the velocity change and
+    the position changes, the same bits as the lines the kernel replaced."""
+    from types import SimpleNamespace
+
+    from alignment_core.estimation.matching import Matcher
+    from alignment_core.geometry.rotations import floats, normalized_f, quat_mul_f
+
+    rng = np.random.default_rng(4)
+    hist, live, _ = _slave_history(np.array([0.2, 0.1, -0.3]), np.array([1.0, 2.0, 3.0]), 10 * MS, 4)
+    stored = [(s.q_nb, s.v_n, s.lat, s.lon, s.h) for s in hist.items]
+    q0, v0, pos0 = live.q_nb, live.v_n, (live.lat, live.lon, live.h)
+    q1 = quat_mul(rotvec_to_quat(rng.normal(size=3) * 1e-3), q0)
+    st = NavState(q_nb=q1, v_n=v0 + rng.normal(size=3) * 0.01, lat=live.lat + 1e-8, lon=live.lon - 2e-8, h=live.h + 0.1)
+    past = NavState(q_nb=stored[1][0], v_n=stored[1][1], lat=0.1, lon=0.2, h=3.0)
+    matcher = object.__new__(Matcher)
+    matcher._lowpass = None
+    got = matcher._carry(SimpleNamespace(ins=SimpleNamespace(s=st), history=hist), q0, v0, pos0, past)
+    cx, cy, cz, cw = floats(q0)
+    q_corr = quat_mul_f(floats(q1), (-cx, -cy, -cz, cw))
+    dv, dpos = st.v_n - v0, (st.lat - pos0[0], st.lon - pos0[1], st.h - pos0[2])
+    for s, (q, v, lat, lon, h) in zip(hist.items, stored, strict=True):
+        assert s.q_nb.tobytes() == np.array(normalized_f(quat_mul_f(q_corr, floats(q)))).tobytes()
+        assert s.v_n.tobytes() == (v + dv).tobytes()
+        assert (s.lat, s.lon, s.h) == (lat + dpos[0], lon + dpos[1], h + dpos[2])
+    q = np.array(quat_mul_f(q_corr, floats(past.q_nb)))
+    assert got.q_nb.tobytes() == (q / np.sqrt(q @ q)).tobytes()
+    assert got.v_n.tobytes() == (past.v_n + dv).tobytes()
+    assert (got.lat, got.lon, got.h) == (past.lat + dpos[0], past.lon + dpos[1], past.h + dpos[2])
+
 def _ldv(t_ms: list[float], v_of_t, valid=None, moving=None) -> LdvHistory:
     h = LdvHistory(10**9, 0.01)
     disp = np.zeros(3)

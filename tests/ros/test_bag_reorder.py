@@ -163,15 +163,28 @@ def test_the_writers_memory_does_not_grow_with_the_recording(tmp_path, monkeypat
     assert BagReader(tmp_path / 'bag').counts() == {'/a': 50_000, '/b': 49_950}
 
 
-def test_the_recorder_holds_its_bag_while_discovery_adds_topics():
-    """Held from a newly subscribed topic until DISCOVERY_SETTLE_S without another; never held
-    by a recorder that does not discover (its topics were all subscribed at its start)."""
+def _recorder(topic_filter, graph_topics=()):
+    """A Recorder without a node: its writer's reorder buffer, its filter and a fake graph."""
     from types import SimpleNamespace
 
-    from alignment_ros.recorder import DISCOVERY_SETTLE_S, Recorder
+    from alignment_ros.recorder import Recorder
 
     rec = object.__new__(Recorder)
     rec.writer = SimpleNamespace(reorder=ReorderBuffer(1 << 20))
+    rec.filter, rec.subscriptions, rec._unusable = topic_filter, {}, set()
+    rec.node = SimpleNamespace(get_topic_names_and_types=lambda: list(graph_topics),
+                               get_publishers_info_by_topic=lambda topic: [])
+    rec.subscribe = lambda topic, type_name, qos: rec.subscriptions.setdefault(topic, type_name)
+    return rec
+
+
+def test_the_recorder_holds_its_bag_while_discovery_adds_topics():
+    """Held from a newly subscribed topic until DISCOVERY_SETTLE_S without another; never held
+    by a recorder that does not discover (its topics were all subscribed at its start)."""
+    from alignment_ros.record_options import TopicFilter
+    from alignment_ros.recorder import DISCOVERY_SETTLE_S
+
+    rec = _recorder(TopicFilter(regex='^/ship/'))
     rec.last_new_topic = 100.0
     held = []
     for discovering, now in ((True, 100.0), (True, 100.0 + 0.5 * DISCOVERY_SETTLE_S),
@@ -179,3 +192,22 @@ def test_the_recorder_holds_its_bag_while_discovery_adds_topics():
         rec.settle(discovering, now)
         held.append(rec.writer.reorder.hold)
     assert held == [True, True, False, False]
+
+
+def test_the_recorder_holds_its_bag_while_a_named_topic_is_missing():
+    """Topics named on the command line (no discovery beyond them): held however long the named
+    topic takes to appear, released once it is subscribed; discovery dates the new subscription."""
+    from alignment_ros.record_options import TopicFilter
+    from alignment_ros.recorder import DISCOVERY_SETTLE_S
+
+    rec = _recorder(TopicFilter(topics=['/a', '/b']), [('/a', ['std_msgs/msg/String'])])
+    rec.filter.include_unpublished = True
+    assert rec.discover() == 1 and rec.pending_topics() == ['/b']
+    rec.settle(True, rec.last_new_topic + 10 * DISCOVERY_SETTLE_S)
+    assert rec.writer.reorder.hold
+    rec.node.get_topic_names_and_types = lambda: [('/a', ['std_msgs/msg/String']), ('/b', ['std_msgs/msg/String'])]
+    before = rec.last_new_topic
+    assert rec.discover() == 1 and not rec.pending_topics() and rec.last_new_topic > before
+    rec.settle(True, rec.last_new_topic + 0.1)
+    assert not rec.writer.reorder.hold
+    assert rec.discover() == 0 and rec.last_new_topic > before

@@ -71,10 +71,7 @@ NS = 1_000_000_000
 SPIN_TIMEOUT_S = 0.05
 FLUSH_INTERVAL_S = 0.5  # the spool reaches the disk this often (what a killed recorder keeps)
 PUBLISHERS_INTERVAL_S = 1.0  # the recorded topics' publishers are looked up this often
-DISCOVERY_SETTLE_S = 1.0
-"""While discovering, the bag's reorder buffer is held until no new topic appeared for this long
-(wall time): a topic subscribed late cannot hold back what was released before it, so its first
-messages could be older (the graph's nodes start within about a second of each other)."""
+DISCOVERY_SETTLE_S = 1.0  # wall s without a new topic before a discovering recording lets its bag go (settle)
 TRIM_INTERVAL_S = 30.0  # freed heap (the reorder buffer's peaks) handed back to the OS this often
 WALL_STAMPED = ('/rosout', '/parameter_events')   # rcl stamps these with the wall clock
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # rmw's name of a node not yet discovered
@@ -152,8 +149,11 @@ class Recorder:
         return n
 
     def settle(self, discovering: bool, now: float) -> None:
-        """Hold the bag's reorder buffer while discovery may still add topics (DISCOVERY_SETTLE_S)."""
-        self.writer.reorder.hold = discovering and now - self.last_new_topic < DISCOVERY_SETTLE_S
+        """Hold the bag's reorder buffer while discovery may still add topics: until none appeared for
+        DISCOVERY_SETTLE_S (the graph's nodes start within about a second of each other) and while a
+        named topic is missing. A topic subscribed late cannot hold back what went out before it."""
+        recent = self.filter is not None and self.filter.discovers() and now - self.last_new_topic < DISCOVERY_SETTLE_S
+        self.writer.reorder.hold = discovering and (recent or bool(self.pending_topics()))
 
     def pending_topics(self) -> list[str]:
         """Topics named on the command line that are not subscribed yet."""
@@ -276,6 +276,7 @@ def _loop(args: argparse.Namespace, rec: Recorder, executor: Any, stop: dict[str
     next_publishers = next_trim = time.monotonic()
     end_seen: float | None = None
     expected: dict[str, int] | None = None
+    rec.settle(discovering, time.monotonic())
     while True:
         executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
         if reached is not None:

@@ -1,7 +1,8 @@
-"""The histories' interpolations between two samples compiled (navigation/history.py): the same
-operations as the numpy and float code they replace, bit for bit (compiled.py), in one call each
-instead of a dozen numpy calls. Float64 operands only: numpy would interpolate a float32 sample
-in float32, so the histories keep their interpreted code for those."""
+"""The histories' interpolations between two samples, and the carry of a feedback to a stored
+slave solution, compiled (navigation/history.py): the same operations as the numpy and float code
+they replace, bit for bit (compiled.py), in one call each instead of a dozen numpy calls. The
+slave's solutions are float64 (the strapdown's and the feedback's); the LDV history keeps its
+interpreted code for a float32 sample, which numpy would interpolate in float32."""
 from __future__ import annotations
 
 import math
