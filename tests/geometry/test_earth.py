@@ -85,6 +85,16 @@ def test_radii_against_ellipse_geometry():
     np.testing.assert_allclose(r_m, (WGS_A * WGS_B) ** 2 / den**3, rtol=1e-13)
 
 
+
+def test_the_transverse_radius_alone_is_radii_s():
+    """The geodetic iteration's R_N without R_M: the same bits and type as radii's, arrays and floats."""
+    lat = np.random.default_rng(2).uniform(-1.57, 1.57, 1000)
+    assert earth.transverse_radius(lat).tobytes() == earth.radii(lat)[1].tobytes()
+    for x in (0.0, -0.7, np.float64(1.2)):
+        a, b = earth.radii(x)[1], earth.transverse_radius(x)
+        assert type(a) is type(b) and np.float64(a).tobytes() == np.float64(b).tobytes()
+
+
 def test_geodetic_to_ecef_known_points():
     np.testing.assert_allclose(earth.geodetic_to_ecef(0.0, 0.0, 0.0), [WGS_A, 0.0, 0.0], atol=1e-9)
     np.testing.assert_allclose(earth.geodetic_to_ecef(0.0, np.pi / 2, 0.0), [0.0, WGS_A, 0.0], atol=1e-9)

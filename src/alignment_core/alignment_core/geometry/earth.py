@@ -31,6 +31,11 @@ def radii(lat: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return r_m, r_n
 
 
+def transverse_radius(lat: float | np.ndarray) -> np.ndarray:
+    """R_N of `radii`, its bits, without R_M's power (the geodetic iteration needs R_N alone)."""
+    return A / np.sqrt(1.0 - E2 * np.sin(lat) ** 2)
+
+
 def gravity(lat: float | np.ndarray, h: float | np.ndarray) -> np.ndarray:
     """Normal gravity magnitude (m/s^2) at latitude `lat` (rad) and height `h` (m)."""
     s2 = np.sin(lat) ** 2
@@ -99,7 +104,7 @@ def ecef_to_geodetic(p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     lat = np.arctan2(z, rho * (1.0 - E2))
     h = np.zeros_like(rho)
     for _ in range(8):
-        _, r_n = radii(lat)
+        r_n = transverse_radius(lat)
         h = rho / np.cos(lat) - r_n
         lat = np.arctan2(z, rho * (1.0 - E2 * r_n / (r_n + h)))
     return lat, lon, h
