@@ -209,3 +209,22 @@ def test_the_fit_is_the_exact_least_squares_slope():
         scale = np.abs(rows).max() / (tau[-1] - tau[0])
         np.testing.assert_allclose(got, _exact_slope(tau, rows), rtol=0.0, atol=1e-14 * scale)
         assert np.array_equal(spot_slope.py_func(t, c, vw, np.zeros((n, 3)), r, 0, 0, n), got)
+
+
+def test_a_master_sample_not_after_the_newest_is_ignored():
+    # samples at 50 Hz until the window is full; then one at the newest time and one older, each
+    # with another velocity and lever arm: the fit is unchanged, bit for bit, and the next new
+    # sample still enters it
+    acc = SpotAcceleration(1.0)
+    c_m = np.eye(3)
+    for k in range(60):
+        acc.add(20_000_000 * k, c_m, np.array([0.1 * k, 0.0, 0.0]), np.zeros(3), np.array([1.0, 2.0, 3.0]))
+    before = acc.acceleration()
+    assert before is not None
+    for t in (20_000_000 * 59, 20_000_000 * 30):
+        acc.add(t, c_m, np.array([50.0, 50.0, 50.0]), np.ones(3), np.array([9.0, 9.0, 9.0]))
+        got = acc.acceleration()
+        assert got is not None and np.array_equal(got, before)
+    acc.add(20_000_000 * 60, c_m, np.array([6.0 + 5.0, 0.0, 0.0]), np.zeros(3), np.array([1.0, 2.0, 3.0]))
+    after = acc.acceleration()
+    assert after is not None and after[0] > before[0]

@@ -154,3 +154,23 @@ def test_a_shallow_copy_steps_apart_from_its_original():
     b.update(np.ones(1), np.ones((1, n)), np.eye(1))
     assert np.array_equal(a.x, same.x) and np.array_equal(a.P, same.P)
     assert not np.array_equal(b.P, same.P)
+
+
+def test_an_adopted_state_is_stepped_in_place_and_a_foreign_one_is_refused():
+    """adopt_x keeps the array it is given (the next predict writes into it: no copy) with the
+    numbers an assignment gives; an array of another dtype or shape is refused."""
+    rng = np.random.default_rng(4)
+    phi = np.eye(4) + 0.01 * rng.standard_normal((4, 4))
+    q = np.eye(4) * 1e-3
+    a, b = KalmanFilter(np.zeros(4), np.eye(4)), KalmanFilter(np.zeros(4), np.eye(4))
+    x = rng.standard_normal(4)
+    mine = x.copy()
+    a.adopt_x(mine)
+    b.x = x.copy()
+    a.predict(phi, q)
+    b.predict(phi, q)
+    assert a.x is mine and np.array_equal(a.x, b.x)
+    with pytest.raises(ValueError, match='adopt_x'):
+        a.adopt_x(x.astype(np.float32))
+    with pytest.raises(ValueError, match='adopt_x'):
+        a.adopt_x(np.zeros(5))

@@ -67,6 +67,7 @@ class LaunchDetector:
         self._fast_run: list[int] = []         # stamps of fast samples in a row while creeping
         self._recent: deque[np.ndarray] = deque(maxlen=max(limits.creep_window, 1))
         self._recent_sum = np.zeros(3)         # running sum of _recent (a cheap trigger for the median)
+        self._window_speed = 0.0               # |mean| of a full _recent (take_valid)
         self._imu = deque() if imu is None else imu   # (t_end, specific force along x, h)
         self.felt_margin_mps = np.inf          # the last check's velocity change minus what it needed
         self._t_last_valid: int | None = None  # validity time of the last valid LDV sample (until one is
@@ -203,7 +204,14 @@ class LaunchDetector:
     def observe(self, s: LdvSample) -> LdvDecision:
         """The decision for the next LDV sample (stamp order)."""
         lim = self.limits
-        speed = norm3(as_float64(s.v_s)) if s.valid else 0.0
+        speed = 0.0
+        if s.valid:
+            rl = self._recent
+            full = len(rl) == rl.maxlen
+            v = as_float64(s.v_s)
+            speed, self._window_speed = take_valid(self._recent_sum, rl[0] if full else v, v, full,
+                                                   lim.creep_window)
+            rl.append(v)
         fast = speed > lim.launch_mps
         valid_at = s.t_ns - lim.ldv_latency_ns
         if self._t_last_valid is None:
@@ -212,11 +220,6 @@ class LaunchDetector:
         self._blind = not s.valid
         if s.valid:
             self._t_last_valid = valid_at
-            rl = self._recent
-            full = len(rl) == rl.maxlen
-            v = as_float64(s.v_s)
-            slide(self._recent_sum, rl[0] if full else v, v, full)
-            rl.append(v)
         launch = None
         if self._moving and self._t_launch is None:     # creeping: watch for the stroke
             median = self._median_speed()
@@ -276,7 +279,7 @@ class LaunchDetector:
         w = lim.creep_window
         if lim.creep_mps <= 0.0 or len(self._recent) < w:
             return False
-        if mean_speed(self._recent_sum, w) <= 0.5 * lim.creep_mps:
+        if self._window_speed <= 0.5 * lim.creep_mps:
             return False
         return self._median_speed() > lim.creep_mps
 
@@ -312,3 +315,12 @@ def mean_speed(total, count):
     norm as norm3)."""
     mean = total / float(count)
     return math.sqrt(np.dot(mean, mean))
+
+
+@kernel
+def take_valid(total, old, new, full, count):
+    """A valid sample (3,) into the window: slide the running sum total (3,) from old to new, and
+    return (norm3 of the sample, mean_speed of the window's sum over count samples; 0.0 for
+    count 0): the three kernels in one call."""
+    slide(total, old, new, full)
+    return norm3(new), (mean_speed(total, count) if count > 0 else 0.0)

@@ -212,16 +212,16 @@ class Matcher:
             if item[0] < t_v:
                 break
         a_n = None
-        parked_iv = iv if iv is not None else _interval_containing(self._intervals, t_v)
-        if not ref.moving and parked_iv is not None:
-            a_n = parked_iv[3] / parked_iv[1]
-        elif ref.moving and prev is not None and prev[0] < t_v:
-            fixed = cross3(m.w_b, r) + v_rel
-            a_n = (c_m @ (m.v_b + fixed) - prev[1] @ (prev[2] + cross3(prev[3], r) + v_rel)) / ((t_v - prev[0]) * 1e-9)
         if self._cfg.delay_acceleration == 'reference' and self.spot is not None:
-            a_fit = self.spot.acceleration()
-            if a_fit is not None:
-                a_n = a_fit
+            a_n = self.spot.acceleration()                  # the fit, when it has one
+        if a_n is None:
+            parked_iv = iv if iv is not None else _interval_containing(self._intervals, t_v)
+            if not ref.moving and parked_iv is not None:
+                a_n = parked_iv[3] / parked_iv[1]
+            elif ref.moving and prev is not None and prev[0] < t_v:
+                fixed = cross3(m.w_b, r) + v_rel
+                a_n = (c_m @ (m.v_b + fixed) - prev[1] @ (prev[2] + cross3(prev[3], r) + v_rel)) \
+                    / ((t_v - prev[0]) * 1e-9)
         rate = None
         if self._cfg.rate_matching and iv is not None and prev is not None \
                 and t_v - prev[0] == int(round(iv[1] * 1e9)):
@@ -317,7 +317,7 @@ class Matcher:
         res.x = fed.x
         live.history.prune(min(t_v, live.t_ns - self._doppler_lat_ns), live.t_ns)
         self._carry(live, q0, v0, pos0, st)           # nav's attitude: fed.q_valid
-        kf.x = fed.x_kept
+        kf.adopt_x(fed.x_kept)                         # the kernel's new array: no copy needed
         res.anchor = (ref.c_m, fed.q_valid)
         res.mu, res.mu_sigma = fed.mu, fed.mu_sigma
         res.t_mu = t_v

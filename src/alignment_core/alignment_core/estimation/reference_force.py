@@ -69,20 +69,14 @@ class SpotAcceleration:
     def add(self, t_ns: int, c_m: np.ndarray, v_b: np.ndarray, w_b: np.ndarray, r: np.ndarray) -> None:
         """One master sample valid at t_ns (increasing times; an older or equal one is ignored):
         attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m."""
-        if self._end > self._start and t_ns <= self._t[self._end - 1]:
-            return
         if self._end == len(self._t):
             self._make_room()
-        k = self._end
-        self._t[k] = t_ns
-        self._c[k] = c_m
-        self._vw[k, 0] = v_b
-        self._vw[k, 1] = w_b
-        self._end = k + 1
+        start = append_sample(self._t, self._c, self._vw, self._start, self._end, t_ns, c_m, v_b, w_b,
+                              self._window_ns)
+        if start < 0:
+            return
+        self._start, self._end = start, self._end + 1
         self._r = np.asarray(r, dtype=float)
-        t = self._t
-        while t_ns - int(t[self._start]) > self._window_ns:
-            self._start += 1
         self._value = None
 
     def acceleration(self) -> np.ndarray | None:
@@ -100,6 +94,25 @@ class SpotAcceleration:
         self._value = spot_slope(self._t, self._c, self._vw, self._rows, r, max(self._rows_end, s), s, e)
         self._rows_end = e
         return self._value
+
+
+@kernel
+def append_sample(t, c, vw, start, end, t_ns, c_m, v_b, w_b, window_ns):
+    """Write a master sample valid at t_ns into row `end` of the window's buffers (t (cap,) ns,
+    c (cap, 3, 3), vw (cap, 2, 3), with room for it) and return the window's new first row (the
+    samples more than window_ns older dropped), or -1 when t_ns is not after the newest sample
+    (nothing written)."""
+    if end > start and t_ns <= t[end - 1]:
+        return -1
+    t[end] = t_ns
+    for a in range(3):
+        for b in range(3):
+            c[end, a, b] = c_m[a, b]
+        vw[end, 0, a] = v_b[a]
+        vw[end, 1, a] = w_b[a]
+    while t_ns - t[start] > window_ns:
+        start += 1
+    return start
 
 
 @kernel

@@ -32,6 +32,7 @@ from alignment_core.compiled import FLOAT64, as_float64
 from alignment_core.navigation.history_kernels import carried_k, ldv_between_k, slave_between_k
 from alignment_core.navigation.strapdown import NavState
 
+_NDARRAY = np.ndarray
 _NO_PHI = np.empty((0, 0))
 _NONE = np.empty(0)
 
@@ -149,8 +150,9 @@ def _beam_between(a: LdvRecord, b: LdvRecord, f: float) -> np.ndarray | None:
 
 def _all_float64(r: LdvRecord) -> bool:
     """Every array of r a float64 numpy array (the compiled interpolation's operands)."""
-    arrays = (r.v_s, r.disp) if r.beam is None else (r.v_s, r.disp, r.beam)
-    return all(type(a) is np.ndarray and a.dtype == FLOAT64 for a in arrays)
+    v, d, b = r.v_s, r.disp, r.beam
+    return (type(v) is _NDARRAY and v.dtype == FLOAT64 and type(d) is _NDARRAY and d.dtype == FLOAT64
+            and (b is None or (type(b) is _NDARRAY and b.dtype == FLOAT64)))
 
 
 class LdvHistory:

@@ -72,6 +72,15 @@ class KalmanFilter(Counters):
         self._P = as_dtype(value, self.dtype)
         self._p_out = True
 
+    def adopt_x(self, x: np.ndarray) -> None:
+        """Set the state to x (n,), a C-ordered array of the filter's dtype that nothing else holds
+        (a kernel's new result): kept as it is, without the copy an assignment to `x` makes
+        before the next step writes it."""
+        if not (type(x) is _NDARRAY and x.dtype == self.dtype and x.flags.c_contiguous and x.shape == self._x.shape):
+            raise ValueError(f'adopt_x: a C-ordered {self.dtype} array of shape {self._x.shape} expected')
+        self._x = x
+        self._x_out = False
+
     def reset_state(self, x: np.ndarray | None = None) -> None:
         """Closed-loop feedback: x <- 0 (or x); P is untouched."""
         self._x = np.zeros_like(self._x) if x is None else np.array(x, dtype=self.dtype)
