@@ -161,3 +161,45 @@ def test_autopilot_holds_and_changes_course():
     k = tr.kinematics(np.array([1200.0, 1800.0]))
     assert math.degrees(k['psi'][0]) == pytest.approx(30.0, abs=0.01)
     assert math.degrees(k['psi'][1]) == pytest.approx(120.0, abs=0.5)
+
+
+def test_tracks_of_one_configuration_share_their_start_bit_for_bit(monkeypatch):
+    """A track given the SharedStart another track of its configuration filled integrates none of
+    what that one did (its warm-up and its shared blocks), only what lies beyond, and its
+    kinematics are those of a track made alone, bit for bit."""
+    import alignment_core.ship.manoeuvring.course_keeping as ck
+    monkeypatch.setattr(ck, 'SHARED_BLOCKS', 1)
+    steps = [0]
+
+    def counted(*args):
+        steps[0] += 1
+        return rk4_step(*args)
+    monkeypatch.setattr(ck, 'rk4_step', counted)
+    rmax = math.radians(35.0)
+    parts = (MmgModel(CARRIER), Autopilot(2.0, 0.01, 60.0, rmax), SteeringGear(rmax, math.radians(2.5), 2.0),
+             CourseSchedule(math.radians(30.0), 20 * 0.514444, 300.0, math.radians(60.0)),
+             math.radians(40.0), math.radians(116.0), 0.5)
+    t = np.linspace(0.0, 700.0, 1401)                    # two blocks of 1024 steps of 0.5 s
+    alone = ManoeuvringTrack(*parts, warmup=60.0).kinematics(t)
+    shared = ck.SharedStart()
+    first = ManoeuvringTrack(*parts, warmup=60.0, shared=shared).kinematics(t)
+    assert shared.warm is not None and len(shared.blocks) == 1
+    steps[0] = 0
+    second = ManoeuvringTrack(*parts, warmup=60.0, shared=shared).kinematics(t)
+    assert steps[0] == ck.BLOCK                            # the second block alone
+    for key, want in alone.items():
+        assert np.array_equal(first[key], want) and np.array_equal(second[key], want), key
+
+
+def test_make_track_shares_a_start_per_configuration_and_keeps_a_few():
+    from alignment_core.config import scenario
+    from alignment_core.ship import track
+    cfg = scenario.load('deck').ship
+    a, b = track.make_track(cfg), track.make_track(cfg)
+    assert a._shared is not None and a._shared is b._shared
+    other = track.make_track(dataclasses.replace(cfg, heading_deg=cfg.heading_deg + 10.0))
+    assert other._shared is not a._shared
+    assert track.make_track(cfg, external=lambda t, n, e, psi: (0.0, 0.0, 0.0, 0.0))._shared is None
+    for k in range(track.SHARED_CONFIGURATIONS + 2):
+        track.make_track(dataclasses.replace(cfg, heading_deg=float(k)))
+    assert len(track._SHARED) == track.SHARED_CONFIGURATIONS

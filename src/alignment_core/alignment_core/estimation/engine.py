@@ -119,28 +119,25 @@ class TransferAlignment(ImuEvents, EngineViews):
 
     # ----- input -----
     def push_imu(self, s: ImuSample) -> bool:
-        return self._push('imu', s)
+        """Queue a sample unless it is implausible (plausibility.py) or not after its stream's
+        previous stamp; a rejection is counted by reason (`last_rejection`). So do the others."""
+        return self._inputs.push('imu', s)
 
     def push_ldv(self, s: LdvSample) -> bool:
         """An LDV sample; ignored (counted) under relative velocity zero or once it was silent."""
         if not self._rel.takes_ldv:
             self._counters.ldv_ignored += 1
             return True
-        return self._push('ldv', s)
+        return self._inputs.push('ldv', s)
 
     def push_master(self, s: MasterSample) -> bool:
-        return self._push('master', s)
+        return self._inputs.push('master', s)
 
     def push_doppler(self, s: DopplerSample) -> bool:
         """A Doppler radar sample (only models that use it take this stream; others ignore it)."""
         if not self._model.uses_doppler:
             return True
-        return self._push('doppler', s)
-
-    def _push(self, stream: str, s) -> bool:
-        """Queue a sample unless it is implausible (plausibility.py) or not after its stream's
-        previous stamp; a rejection is counted by reason (`last_rejection`)."""
-        return self._inputs.push(stream, s)
+        return self._inputs.push('doppler', s)
 
     def process(self, final: bool = False) -> list[Estimate]:
         """Run every event up to the watermark (all of them if final); return the new outputs as
@@ -160,6 +157,8 @@ class TransferAlignment(ImuEvents, EngineViews):
             for h in self._launch.release():         # an unconfirmed run at the end: parked
                 self._record_ldv(h)
             self._match_pending(final=True)
+        if len(self._outputs) == n0:                # most calls: no output at this master stamp
+            return []
         new = [self._guard.publish(e, self._prior) for e in self._outputs[n0:]]
         self._published.extend(new)
         if not self._keep_history:

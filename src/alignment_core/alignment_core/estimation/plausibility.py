@@ -129,8 +129,10 @@ class InputGate:
             why = ldv_reason(s, lim)
         else:
             why = doppler_reason(s, lim)
-        if not why and self._future(stream, given.t_ns):
-            why = 'future_stamp'
+        if not why:
+            prev = self._latest[stream]                 # _future's first test, inline: most stamps pass it
+            if prev is not None and given.t_ns - prev > lim.future_ns and self._future(stream, given.t_ns):
+                why = 'future_stamp'
         self.last_rejection = why
         if why:
             name = f'rejected_{why}'

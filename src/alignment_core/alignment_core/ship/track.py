@@ -13,15 +13,28 @@ from alignment_core.ship.config import ShipConfig
 from alignment_core.units import DEG, KNOT
 
 if TYPE_CHECKING:
-    from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack
+    from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack, SharedStart
+
+SHARED_CONFIGURATIONS = 4
+"""Configurations whose track starts are kept (the latest made): a sweep over many ship
+configurations keeps at most this many (some 1.6 MB each)."""
+_SHARED: dict[ShipConfig, SharedStart] = {}
 
 
 def make_track(cfg: ShipConfig, external=None) -> ManoeuvringTrack:
     """The low-frequency MMG track of `course_keeping: mmg` (course_keeping.ManoeuvringTrack),
-    with optional external forces `external(t, north, east, psi) -> (X, Y, N, K)`."""
+    with optional external forces `external(t, north, east, psi) -> (X, Y, N, K)`. Without them,
+    the tracks of one configuration share their start (course_keeping.SharedStart): a Monte
+    Carlo's runs integrate it once per process."""
     from alignment_core.ship.manoeuvring import mmg
     from alignment_core.ship.manoeuvring.autopilot import Autopilot, CourseSchedule, SteeringGear
-    from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack
+    from alignment_core.ship.manoeuvring.course_keeping import ManoeuvringTrack, SharedStart
+    shared = None
+    if external is None:
+        shared = _SHARED.pop(cfg, None) or SharedStart()
+        _SHARED[cfg] = shared                           # the latest made last
+        while len(_SHARED) > SHARED_CONFIGURATIONS:
+            del _SHARED[next(iter(_SHARED))]
     speed = cfg.speed_kn * KNOT
     zeta = cfg.roll_zeta if cfg.roll_zeta > 0.0 else 0.05 + 0.05 * min(speed / (30.0 * KNOT), 1.0)
     ship = replace(mmg.SHIPS[cfg.ship_model], roll_period_s=cfg.roll_period_s, roll_zeta=zeta)
@@ -33,7 +46,7 @@ def make_track(cfg: ShipConfig, external=None) -> ManoeuvringTrack:
                            turn_to=cfg.turn_to_deg * DEG, turn_rate=cfg.turn_rate_dps * DEG,
                            speed_to=cfg.speed_to_kn * KNOT if cfg.speed_to_kn >= 0.0 else -1.0)
     return ManoeuvringTrack(model, autopilot, gear, sched, cfg.lat_deg * DEG, cfg.lon_deg * DEG,
-                            cfg.mmg_step_s, external)
+                            cfg.mmg_step_s, external, shared=shared)
 
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)     # 8-point Gauss-Legendre on [-1, 1]

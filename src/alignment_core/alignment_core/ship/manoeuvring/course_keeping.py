@@ -23,7 +23,9 @@ step up to t), so lon' = v_E / (R_N cos lat). Heights are zero (heave is wave fr
 
 The grid extends lazily (blocks of `BLOCK` steps) as later times are asked for: any chunking
 of the evaluation gives the same numbers. Only the recent steps are kept (KEEP before the least
-time read), so a node's track holds a bounded history however long it runs.
+time read), so a node's track holds a bounded history however long it runs. The tracks of one
+configuration may share their start (`SharedStart`: the warm-up and the first blocks, integrated
+once): a Monte Carlo's runs differ in their sea, never in their track.
 """
 from __future__ import annotations
 
@@ -42,6 +44,9 @@ BLOCK = 1024
 KEEP = 2 * BLOCK
 """Grid steps before the least time of a read that stay readable (recent_rows.py): far more than
 the spectral motion's knot blocks (25.6 s) reach back before the times a node asks for."""
+
+SHARED_BLOCKS = 8
+"""Blocks of a track's start (68 min at 0.5 s steps) that the tracks of a configuration share."""
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _GL_U = 0.5 * (_GL_X + 1.0)                   # nodes on [0, 1]
@@ -108,6 +113,19 @@ def quintic_values(c, s, h, order: int = 2):
     return out
 
 
+class SharedStart:
+    """The integrated start of a track: the state after the warm-up and its offset, then per
+    block of the grid (the first SHARED_BLOCKS) the state and derivative at its last knot, its
+    quintic coefficients (BLOCK, 24) and longitudes at its knots (BLOCK, 1). The first track of a
+    configuration fills it, a later one replays it: the same numbers, bit for bit (they are the
+    first one's), without integrating them again. Only tracks of one configuration, without
+    external forces, may share one (`make_track` keeps one per configuration)."""
+
+    def __init__(self) -> None:
+        self.warm: tuple[tuple[float, ...], tuple[float, float]] | None = None
+        self.blocks: list[tuple[tuple[float, ...], tuple[float, ...], np.ndarray, np.ndarray]] = []
+
+
 class ManoeuvringTrack:
     """The closed-loop MMG track (module docstring). `kinematics(t)` gives the arrays the
     ship truth needs; `states` (knots x 11) the raw RK4 states on the grid."""
@@ -117,8 +135,10 @@ class ManoeuvringTrack:
 
     def __init__(self, model: MmgModel, autopilot: Autopilot, gear: SteeringGear,
                  schedule: CourseSchedule, lat0: float, lon0: float, step: float,
-                 external=None, warmup: float = WARMUP_S) -> None:
+                 external=None, warmup: float = WARMUP_S, shared: SharedStart | None = None) -> None:
+        """shared: the start of a track of this same configuration, replayed (filled if empty)."""
         self.model, self.ap, self.gear, self.sched = model, autopilot, gear, schedule
+        self._shared = shared
         self.ext = external
         self.lat0, self.lon0, self.h = lat0, lon0, step
         self.arc0 = float(meridian_arc(lat0))
@@ -129,10 +149,15 @@ class ManoeuvringTrack:
         y[I_N] = -u0 * warmup * math.cos(schedule.heading0)
         y[I_E] = -u0 * warmup * math.sin(schedule.heading0)
         y[I_PSI], y[I_U], y[self.I_REVS] = schedule.heading0, u0, self._revs_for(u0)
-        n_warm = int(round(warmup / step))
-        for k in range(n_warm):
-            y, _ = rk4_step(self.rhs, -warmup + k * step, y, step)
-        self.offset = (y[I_N], y[I_E])
+        if shared is not None and shared.warm is not None:
+            y, self.offset = list(shared.warm[0]), shared.warm[1]
+        else:
+            n_warm = int(round(warmup / step))
+            for k in range(n_warm):
+                y, _ = rk4_step(self.rhs, -warmup + k * step, y, step)
+            self.offset = (y[I_N], y[I_E])
+            if shared is not None:
+                shared.warm = (tuple(y), self.offset)
         self._y = y                                   # state at the last knot
         self._f = self.rhs(0.0, y)                    # its derivative
         self._steps = 0                               # grid steps integrated (knots 0 .. steps)
@@ -164,6 +189,15 @@ class ManoeuvringTrack:
 
     def _extend(self, n: int) -> None:
         h, k0 = self.h, self._steps
+        block = k0 // BLOCK if n == BLOCK and k0 % BLOCK == 0 else SHARED_BLOCKS
+        sh = self._shared
+        if sh is not None and block < len(sh.blocks):           # integrated by a track before this one
+            y_end, f_end, coef_rows, lon_rows = sh.blocks[block]
+            self._y, self._f = list(y_end), list(f_end)
+            self._steps += n
+            self._coef.extend(coef_rows)
+            self._lon_knots.extend(lon_rows)
+            return
         ys, fs = [], []
         y, f = self._y, self._f
         prev_y, prev_f = np.array(y, dtype=float), np.array(f, dtype=float)
@@ -179,14 +213,18 @@ class ManoeuvringTrack:
         y1, f1 = np.asarray(ys), np.asarray(fs)
         ch0, ch1 = self._channels(y0, f0), self._channels(y1, f1)
         coef = quintic_coefficients(*ch0, *ch1, h)     # (n, 4, 6)
-        self._coef.extend(coef.reshape(n, 4 * 6))
+        coef_rows = coef.reshape(n, 4 * 6)
+        self._coef.extend(coef_rows)
         # longitude at the new knots
         nodes = _GL_U[None, :]
         north = quintic_values(coef[:, None, 0], nodes, h, 0)[0]
         e_dot = quintic_values(coef[:, None, 1], nodes, h, 1)[1]
         q = self._q(north)
         inc = h * np.sum(q * e_dot * _GL_WU, axis=1)
-        self._lon_knots.extend((self._lon_knots[self._lon_knots.n - 1][0] + np.cumsum(inc))[:, None])
+        lon_rows = (self._lon_knots[self._lon_knots.n - 1][0] + np.cumsum(inc))[:, None]
+        self._lon_knots.extend(lon_rows)
+        if sh is not None and block == len(sh.blocks) < SHARED_BLOCKS:
+            sh.blocks.append((tuple(y), tuple(f), coef_rows.copy(), lon_rows.copy()))
 
     def _channels(self, y: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(value, first, second derivative), each (n, 4), of north, east, psi, phi (north
