@@ -21,12 +21,14 @@ import numpy as np
 
 from alignment_core import pipeline
 from alignment_core.config import scenario
+from alignment_core.ship import track
 from alignment_experiments import monte_carlo
 
 
 def throughput(name: str, runs: int, workers: int) -> float:
     specs = [monte_carlo.RunSpec(index=i, cell='bench', scenario=name, overrides=(), seed=100 + i,
                                  score_at=250.0) for i in range(runs)]
+    track.forget_shared_starts()            # each pass starts as a fresh study would: no ship track kept
     t = time.perf_counter()
     monte_carlo.run_many(specs, workers=workers, progress=False)
     return time.perf_counter() - t

@@ -164,11 +164,12 @@ def test_autopilot_holds_and_changes_course():
 
 
 def test_tracks_of_one_configuration_share_their_start_bit_for_bit(monkeypatch):
-    """A track given the SharedStart another track of its configuration filled integrates none of
-    what that one did (its warm-up and its shared blocks), only what lies beyond, and its
-    kinematics are those of a track made alone, bit for bit."""
+    """Tracks made with one SharedStart, read in turns: nothing is stored while there is one
+    track (a process with one track keeps no copy), then each block by whichever track reaches
+    it first, up to SHARED_BLOCKS; a third track integrates only the block beyond them; each
+    one's kinematics, read in turns, are those of a track made alone, bit for bit."""
     import alignment_core.ship.manoeuvring.course_keeping as ck
-    monkeypatch.setattr(ck, 'SHARED_BLOCKS', 1)
+    monkeypatch.setattr(ck, 'SHARED_BLOCKS', 2)
     steps = [0]
 
     def counted(*args):
@@ -179,16 +180,26 @@ def test_tracks_of_one_configuration_share_their_start_bit_for_bit(monkeypatch):
     parts = (MmgModel(CARRIER), Autopilot(2.0, 0.01, 60.0, rmax), SteeringGear(rmax, math.radians(2.5), 2.0),
              CourseSchedule(math.radians(30.0), 20 * 0.514444, 300.0, math.radians(60.0)),
              math.radians(40.0), math.radians(116.0), 0.5)
-    t = np.linspace(0.0, 700.0, 1401)                    # two blocks of 1024 steps of 0.5 s
-    alone = ManoeuvringTrack(*parts, warmup=60.0).kinematics(t)
+    early, late = np.linspace(0.0, 400.0, 801), np.linspace(400.5, 1100.0, 1400)   # three blocks of 512 s
+    alone = ManoeuvringTrack(*parts, warmup=60.0)
+    want = [alone.kinematics(early), alone.kinematics(late)]
     shared = ck.SharedStart()
-    first = ManoeuvringTrack(*parts, warmup=60.0, shared=shared).kinematics(t)
-    assert shared.warm is not None and len(shared.blocks) == 1
+    first = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
+    got_first = [first.kinematics(early)]
+    assert shared.warm is None and not shared.blocks           # one track so far: nothing kept
+    second = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
+    got_second = [second.kinematics(early)]                    # the warm-up and the first block, stored
+    got_first.append(first.kinematics(late))                   # the second block stored by the first track
+    got_second.append(second.kinematics(late))                 # replayed, then its third integrated
+    assert shared.warm is not None and len(shared.blocks) == 2
     steps[0] = 0
-    second = ManoeuvringTrack(*parts, warmup=60.0, shared=shared).kinematics(t)
-    assert steps[0] == ck.BLOCK                            # the second block alone
-    for key, want in alone.items():
-        assert np.array_equal(first[key], want) and np.array_equal(second[key], want), key
+    third = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
+    got_third = [third.kinematics(early), third.kinematics(late)]
+    assert steps[0] == ck.BLOCK                                # the third block alone
+    for got in (got_first, got_second, got_third):
+        for part, want_part in zip(got, want, strict=True):
+            for key, value in want_part.items():
+                assert np.array_equal(part[key], value), key
 
 
 def test_make_track_shares_a_start_per_configuration_and_keeps_a_few():
@@ -196,10 +207,12 @@ def test_make_track_shares_a_start_per_configuration_and_keeps_a_few():
     from alignment_core.ship import track
     cfg = scenario.load('deck').ship
     a, b = track.make_track(cfg), track.make_track(cfg)
-    assert a._shared is not None and a._shared is b._shared
+    assert a._shared is not None and a._shared is b._shared and a._shared.users == 2
     other = track.make_track(dataclasses.replace(cfg, heading_deg=cfg.heading_deg + 10.0))
     assert other._shared is not a._shared
     assert track.make_track(cfg, external=lambda t, n, e, psi: (0.0, 0.0, 0.0, 0.0))._shared is None
     for k in range(track.SHARED_CONFIGURATIONS + 2):
         track.make_track(dataclasses.replace(cfg, heading_deg=float(k)))
     assert len(track._SHARED) == track.SHARED_CONFIGURATIONS
+    track.forget_shared_starts()
+    assert track.make_track(cfg)._shared is not a._shared

@@ -320,7 +320,7 @@ def mean_speed(total, count):
 @kernel
 def take_valid(total, old, new, full, count):
     """A valid sample (3,) into the window: slide the running sum total (3,) from old to new, and
-    return (norm3 of the sample, mean_speed of the window's sum over count samples; 0.0 for
-    count 0): the three kernels in one call."""
+    return (norm3 of the sample, mean_speed of the window's sum over count samples): the three
+    kernels in one call."""
     slide(total, old, new, full)
-    return norm3(new), (mean_speed(total, count) if count > 0 else 0.0)
+    return norm3(new), mean_speed(total, count)

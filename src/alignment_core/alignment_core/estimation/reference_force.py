@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from alignment_core.compiled import kernel
+from alignment_core.compiled import as_float64, kernel
 from alignment_core.geometry.rotations import cross_f, floats
 
 MIN_FILL = 0.8
@@ -71,8 +71,8 @@ class SpotAcceleration:
         attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m."""
         if self._end == len(self._t):
             self._make_room()
-        start = append_sample(self._t, self._c, self._vw, self._start, self._end, t_ns, c_m, v_b, w_b,
-                              self._window_ns)
+        start = append_sample(self._t, self._c, self._vw, self._start, self._end, t_ns, as_float64(c_m),
+                              as_float64(v_b), as_float64(w_b), self._window_ns)
         if start < 0:
             return
         self._start, self._end = start, self._end + 1

@@ -21,6 +21,11 @@ configurations keeps at most this many (some 1.6 MB each)."""
 _SHARED: dict[ShipConfig, SharedStart] = {}
 
 
+def forget_shared_starts() -> None:
+    """Drop every shared track start (a benchmark's pass that must start as a fresh process)."""
+    _SHARED.clear()
+
+
 def make_track(cfg: ShipConfig, external=None) -> ManoeuvringTrack:
     """The low-frequency MMG track of `course_keeping: mmg` (course_keeping.ManoeuvringTrack),
     with optional external forces `external(t, north, east, psi) -> (X, Y, N, K)`. Without them,

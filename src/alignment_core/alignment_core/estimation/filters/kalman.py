@@ -38,6 +38,7 @@ class KalmanFilter(Counters):
     over its non-zero cells only, the Joseph form in O(m n^2) operations instead of O(n^3).
     They write x and P in place, copy on write: an array the filter has handed out (read as
     `x` or `P`) or been given (assigned) is never changed by it; the next step first copies it.
+    The one exception is an array given to `adopt_x`, which the caller gives up.
     A filter stepped without being read allocates nothing for x and P, and a kernel's returned
     array costs more than its arithmetic at this size (numba builds a Python object for it)."""
 

@@ -30,6 +30,7 @@ once): a Monte Carlo's runs differ in their sea, never in their track.
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
@@ -116,14 +117,26 @@ def quintic_values(c, s, h, order: int = 2):
 class SharedStart:
     """The integrated start of a track: the state after the warm-up and its offset, then per
     block of the grid (the first SHARED_BLOCKS) the state and derivative at its last knot, its
-    quintic coefficients (BLOCK, 24) and longitudes at its knots (BLOCK, 1). The first track of a
-    configuration fills it, a later one replays it: the same numbers, bit for bit (they are the
-    first one's), without integrating them again. Only tracks of one configuration, without
-    external forces, may share one (`make_track` keeps one per configuration)."""
+    quintic coefficients (BLOCK, 24) and longitudes at its knots (BLOCK, 1). A track replays what
+    an earlier one stored: the same numbers, bit for bit (they are that one's), without
+    integrating them again. Tracks store only once a second one has been made (`users`): a
+    process with one track (a node) keeps no copy, which would grow its memory block by block.
+    Only tracks of one configuration, without external forces, may share one (`make_track`
+    keeps one per configuration)."""
 
     def __init__(self) -> None:
+        self.users = 0                                # tracks made with it
         self.warm: tuple[tuple[float, ...], tuple[float, float]] | None = None
         self.blocks: list[tuple[tuple[float, ...], tuple[float, ...], np.ndarray, np.ndarray]] = []
+        self._lock = threading.Lock()
+
+    def store_block(self, block: int, entry: tuple[tuple[float, ...], tuple[float, ...], np.ndarray, np.ndarray]
+                    ) -> None:
+        """Keep a block's result if it is the next one, within SHARED_BLOCKS, and another track
+        may replay it."""
+        with self._lock:
+            if self.users > 1 and block == len(self.blocks) < SHARED_BLOCKS:
+                self.blocks.append(entry)
 
 
 class ManoeuvringTrack:
@@ -139,6 +152,8 @@ class ManoeuvringTrack:
         """shared: the start of a track of this same configuration, replayed (filled if empty)."""
         self.model, self.ap, self.gear, self.sched = model, autopilot, gear, schedule
         self._shared = shared
+        if shared is not None:
+            shared.users += 1
         self.ext = external
         self.lat0, self.lon0, self.h = lat0, lon0, step
         self.arc0 = float(meridian_arc(lat0))
@@ -156,7 +171,7 @@ class ManoeuvringTrack:
             for k in range(n_warm):
                 y, _ = rk4_step(self.rhs, -warmup + k * step, y, step)
             self.offset = (y[I_N], y[I_E])
-            if shared is not None:
+            if shared is not None and shared.users > 1:
                 shared.warm = (tuple(y), self.offset)
         self._y = y                                   # state at the last knot
         self._f = self.rhs(0.0, y)                    # its derivative
@@ -223,8 +238,8 @@ class ManoeuvringTrack:
         inc = h * np.sum(q * e_dot * _GL_WU, axis=1)
         lon_rows = (self._lon_knots[self._lon_knots.n - 1][0] + np.cumsum(inc))[:, None]
         self._lon_knots.extend(lon_rows)
-        if sh is not None and block == len(sh.blocks) < SHARED_BLOCKS:
-            sh.blocks.append((tuple(y), tuple(f), coef_rows.copy(), lon_rows.copy()))
+        if sh is not None and sh.users > 1 and block == len(sh.blocks) < SHARED_BLOCKS:
+            sh.store_block(block, (tuple(y), tuple(f), coef_rows.copy(), lon_rows.copy()))
 
     def _channels(self, y: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(value, first, second derivative), each (n, 4), of north, east, psi, phi (north
