@@ -105,9 +105,15 @@ def update(x, p, z, h, r, gate, y, s):
     nis < 0 (S not positive definite: the caller raises). A singular S raises
     np.linalg.LinAlgError; x and P are unchanged unless accepted."""
     hx, ph, hph = products(x, p, h)
-    y[:] = z - hx
-    s[:] = hph + r
-    if not np.all(np.isfinite(s)):
+    m = y.shape[0]
+    finite = True
+    for i in range(m):                 # y[:] = z - hx and s[:] = hph + r, element by element
+        y[i] = z[i] - hx[i]
+        for j in range(m):
+            s[i, j] = hph[i, j] + r[i, j]
+            if not -np.inf < s[i, j] < np.inf:
+                finite = False
+    if not finite:
         return np.nan, False
     s_inv = inverse(s)
     nis = float(dot(dot(y, s_inv), y))
@@ -125,9 +131,11 @@ def joseph(x, p, ph, s_inv, y, h, r):
     A (I - K H)^T + K R K^T = A + (K R - A H^T) K^T; H's zero cells are skipped (a selecting
     H costs a copy of its rows). Every element is accumulated in P's dtype."""
     k = dot(ph, s_inv)
-    x[:] = x + dot(k, y)
+    ky = dot(k, y)
     n = p.shape[0]
     m = h.shape[0]
+    for i in range(n):                             # x[:] = x + K y
+        x[i] = x[i] + ky[i]
     kt = np.ascontiguousarray(k.T)                 # (m, n)
     hp = np.zeros((m, n), p.dtype)                 # H P
     for j in range(m):
@@ -136,7 +144,7 @@ def joseph(x, p, ph, s_inv, y, h, r):
             if v != 0.0:
                 for c in range(n):
                     hp[j, c] += v * p[l, c]
-    a = p.copy()                                   # P - K (H P)
+    a = p                                          # P - K (H P), in place: H P is taken
     for i in range(n):
         for j in range(m):
             v = kt[j, i]
@@ -154,7 +162,7 @@ def joseph(x, p, ph, s_inv, y, h, r):
             v = d[i, j]
             for c in range(n):
                 a[i, c] += v * kt[j, c]
-    for i in range(n):                             # p[:] = (a + a.T) * 0.5, a sum being symmetric
+    for i in range(n):                             # P = (A + A^T) / 2 in place, each pair read before written
         for c in range(i, n):
             v = (a[i, c] + a[c, i]) * 0.5
             p[i, c] = v
