@@ -206,6 +206,7 @@ def test_make_track_shares_a_start_per_configuration_and_keeps_a_few():
     from alignment_core.config import scenario
     from alignment_core.ship import track
     cfg = scenario.load('deck').ship
+    track.forget_shared_starts()                    # other tests of this process made tracks of it
     a, b = track.make_track(cfg), track.make_track(cfg)
     assert a._shared is not None and a._shared is b._shared and a._shared.users == 2
     other = track.make_track(dataclasses.replace(cfg, heading_deg=cfg.heading_deg + 10.0))
