@@ -178,3 +178,25 @@ def test_a_non_finite_s_is_not_accepted_and_a_singular_one_raises():
     with pytest.raises(np.linalg.LinAlgError):
         kf.update(z, np.zeros_like(h), np.zeros_like(r))      # S = 0: singular
     assert kf.n_updates == 0 and np.array_equal(kf.x, x) and np.array_equal(kf.P, p)
+
+
+@pytest.mark.parametrize('compiled', [True, False])
+@pytest.mark.parametrize('bad', ['h_rows', 'r', 'z'])
+def test_measurement_sizes_that_do_not_agree_are_refused_before_any_write(bad, compiled):
+    """An H of other rows, an R of another size or a z of another length than the y and S the
+    filter allocated: ValueError, with x, P, y and S untouched (the kernel reads no memory
+    beyond its arrays)."""
+    rng = np.random.default_rng(11)
+    x, p, z, h, r = _problem(rng, selecting=False)
+    y, s = np.full(3, 7.0), np.full((3, 3), 7.0)
+    if bad == 'h_rows':
+        h = h[:2]
+    elif bad == 'r':
+        r = r[:2, :2]
+    else:
+        z = z[:2]
+    x1, p1 = x.copy(), p.copy()
+    with pytest.raises(ValueError, match='measurement size'):
+        (kk.update if compiled else kk.update.py_func)(x1, p1, z, h, r, np.inf, y, s)
+    assert np.array_equal(x1, x) and np.array_equal(p1, p)
+    assert np.all(y == 7.0) and np.all(s == 7.0)

@@ -103,9 +103,13 @@ def update(x, p, z, h, r, gate, y, s):
     it costs to allocate in Python); returns (nis, accepted), x <- x+ and P <- P+ in place if
     accepted. Not accepted when nis > gate, when S is not finite (nis is then NaN) or when
     nis < 0 (S not positive definite: the caller raises). A singular S raises
-    np.linalg.LinAlgError; x and P are unchanged unless accepted."""
-    hx, ph, hph = products(x, p, h)
+    np.linalg.LinAlgError, shapes that do not agree ValueError; x and P are unchanged unless
+    accepted."""
     m = y.shape[0]
+    if z.shape[0] != m or h.shape[0] != m or h.shape[1] != x.shape[0] or r.shape[0] != m or r.shape[1] != m \
+            or s.shape[0] != m or s.shape[1] != m:
+        raise ValueError('update: z, H, R, y and S must agree in the measurement size')
+    hx, ph, hph = products(x, p, h)
     finite = True
     for i in range(m):                 # y[:] = z - hx and s[:] = hph + r, element by element
         y[i] = z[i] - hx[i]
