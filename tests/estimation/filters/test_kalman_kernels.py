@@ -192,7 +192,7 @@ def test_measurement_sizes_that_do_not_agree_are_refused_before_any_write(bad, c
     if bad == 'h_rows':
         h = h[:2]
     elif bad == 'r':
-        r = r[:2, :2]
+        r = np.ascontiguousarray(r[:2, :2])
     else:
         z = z[:2]
     x1, p1 = x.copy(), p.copy()
