@@ -130,13 +130,20 @@ class SharedStart:
         self.blocks: list[tuple[tuple[float, ...], tuple[float, ...], np.ndarray, np.ndarray]] = []
         self._lock = threading.Lock()
 
-    def store_block(self, block: int, entry: tuple[tuple[float, ...], tuple[float, ...], np.ndarray, np.ndarray]
-                    ) -> None:
-        """Keep a block's result if it is the next one, within SHARED_BLOCKS, and another track
-        may replay it."""
+    def store_warm(self, y: list[float], offset: tuple[float, float]) -> None:
+        """Keep the state after the warm-up and its offset, if another track may replay them."""
+        with self._lock:
+            if self.users > 1 and self.warm is None:
+                self.warm = (tuple(y), offset)
+
+    def store_block(self, block: int, y: list[float], f: list[float], coef_rows: np.ndarray,
+                    lon_rows: np.ndarray) -> None:
+        """Keep a copy of a block's result (its last knot's state and derivative, coefficients
+        and longitudes) if it is the next one, within SHARED_BLOCKS, and another track may
+        replay it."""
         with self._lock:
             if self.users > 1 and block == len(self.blocks) < SHARED_BLOCKS:
-                self.blocks.append(entry)
+                self.blocks.append((tuple(y), tuple(f), coef_rows.copy(), lon_rows.copy()))
 
 
 class ManoeuvringTrack:
@@ -149,7 +156,8 @@ class ManoeuvringTrack:
     def __init__(self, model: MmgModel, autopilot: Autopilot, gear: SteeringGear,
                  schedule: CourseSchedule, lat0: float, lon0: float, step: float,
                  external=None, warmup: float = WARMUP_S, shared: SharedStart | None = None) -> None:
-        """shared: the start of a track of this same configuration, replayed (filled if empty)."""
+        """shared: the start of tracks of this same configuration: what it holds is replayed,
+        what it lacks stored once there is a second track (SharedStart)."""
         self.model, self.ap, self.gear, self.sched = model, autopilot, gear, schedule
         self._shared = shared
         if shared is not None:
@@ -171,8 +179,8 @@ class ManoeuvringTrack:
             for k in range(n_warm):
                 y, _ = rk4_step(self.rhs, -warmup + k * step, y, step)
             self.offset = (y[I_N], y[I_E])
-            if shared is not None and shared.users > 1:
-                shared.warm = (tuple(y), self.offset)
+            if shared is not None:
+                shared.store_warm(y, self.offset)
         self._y = y                                   # state at the last knot
         self._f = self.rhs(0.0, y)                    # its derivative
         self._steps = 0                               # grid steps integrated (knots 0 .. steps)
@@ -238,8 +246,8 @@ class ManoeuvringTrack:
         inc = h * np.sum(q * e_dot * _GL_WU, axis=1)
         lon_rows = (self._lon_knots[self._lon_knots.n - 1][0] + np.cumsum(inc))[:, None]
         self._lon_knots.extend(lon_rows)
-        if sh is not None and sh.users > 1 and block == len(sh.blocks) < SHARED_BLOCKS:
-            sh.store_block(block, (tuple(y), tuple(f), coef_rows.copy(), lon_rows.copy()))
+        if sh is not None:
+            sh.store_block(block, y, f, coef_rows, lon_rows)
 
     def _channels(self, y: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(value, first, second derivative), each (n, 4), of north, east, psi, phi (north
