@@ -6,6 +6,7 @@ singular innovation covariance or Phi, with a broken covariance; and engine runs
 against the same runs through the calls."""
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from types import SimpleNamespace
 
@@ -187,9 +188,9 @@ def _singular_phi(kf, match, past):
 @pytest.mark.parametrize('broken, error', [(_singular_s, np.linalg.LinAlgError), (_broken_p, NumericalBreakdownError),
                                            (_singular_phi, np.linalg.LinAlgError)])
 def test_a_singular_or_broken_update_raises_as_the_calls_do(broken, error):
-    """S singular (R zero and P zero) or Phi singular: np.linalg.LinAlgError, nothing fed back; a
-    covariance whose diagonal turns negative: NumericalBreakdownError after the update, nothing
-    fed back."""
+    """S singular (R zero and P zero) or Phi singular: np.linalg.LinAlgError, nothing fed back (the
+    calls' singular Phi with numpy's RuntimeWarning, as filters/base.py's solve says); a covariance
+    whose diagonal turns negative: NumericalBreakdownError after the update, nothing fed back."""
     model = make_model(FilterConfig(**MODELS['vm15+delay+lever']))
     done = []
     for call in (_calls, _one_call):
@@ -197,7 +198,10 @@ def test_a_singular_or_broken_update_raises_as_the_calls_do(broken, error):
         nav, corr, kf, match = _case(rng, model.n, extras=1)
         past = broken(kf, match, _past(rng, model.n))
         q0, bg0, dr0 = nav.q_nb, corr.bg, corr.dr
-        with pytest.raises(error):
+        # the calls' solve of a singular Phi returns NaN with numpy's warning (filters/base.py); the kernel's raises
+        warns = pytest.warns(RuntimeWarning, match='invalid value encountered in solve') \
+            if broken is _singular_phi and call is _calls else contextlib.nullcontext()
+        with pytest.raises(error), warns:
             call(model, kf, match, nav, corr, None, None, past)
         assert nav.q_nb is q0 and corr.bg is bg0 and corr.dr is dr0              # nothing fed back
         done.append(kf)
