@@ -95,19 +95,42 @@ def geodetic_to_ecef(lat, lon, h) -> np.ndarray:
                      (r_n * (1.0 - E2) + h) * sl], axis=-1)
 
 
+GEODETIC_PASSES = 8                # passes of the geodetic iteration
+_EVERY_POINT_PASSES = 4            # of which every point takes part in the first four
+
+
 def ecef_to_geodetic(p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Geodetic (lat, lon, h) of ECEF points (..., 3); iterative, to a few nm (double precision)."""
+    """Geodetic (lat, lon, h) of ECEF points (..., 3); iterative, to a few nm (double precision).
+    Each pass maps a point's latitude to the next. A pass that leaves it unchanged has reached its
+    fixed point, and every later pass gives the same bits, so after the fourth pass only the
+    points still moving are iterated (fewer than half of them on a ship's track): the numbers of
+    eight passes over every point."""
     p = np.asarray(p, dtype=float)
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     lon = np.arctan2(y, x)
     rho = np.hypot(x, y)
+    shape = rho.shape
+    rho, z = rho.ravel(), z.ravel()
     lat = np.arctan2(z, rho * (1.0 - E2))
-    h = np.zeros_like(rho)
-    for _ in range(8):
-        r_n = transverse_radius(lat)
-        h = rho / np.cos(lat) - r_n
-        lat = np.arctan2(z, rho * (1.0 - E2 * r_n / (r_n + h)))
-    return lat, lon, h
+    prev = lat
+    for _ in range(_EVERY_POINT_PASSES):
+        prev = lat
+        lat, h = _geodetic_pass(prev, rho, z)
+    moving = np.flatnonzero(lat != prev)             # a NaN never stops: it takes every pass
+    for _ in range(GEODETIC_PASSES - _EVERY_POINT_PASSES):
+        if not len(moving):
+            break
+        prev = lat[moving]
+        lat[moving], h[moving] = _geodetic_pass(prev, rho[moving], z[moving])
+        moving = moving[lat[moving] != prev]
+    return lat.reshape(shape)[()], lon, h.reshape(shape)[()]
+
+
+def _geodetic_pass(lat: np.ndarray, rho: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One pass of the geodetic iteration on points (K,): (the next latitude, the height at lat)."""
+    r_n = transverse_radius(lat)
+    h = rho / np.cos(lat) - r_n
+    return np.arctan2(z, rho * (1.0 - E2 * r_n / (r_n + h))), h
 
 
 def c_ecef_to_enu(lat, lon) -> np.ndarray:
