@@ -194,12 +194,62 @@ def test_tracks_of_one_configuration_share_their_start_bit_for_bit(monkeypatch):
     assert shared.warm is not None and len(shared.blocks) == 2
     steps[0] = 0
     third = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
-    got_third = [third.kinematics(early), third.kinematics(late)]
+    other_times = [early + 0.25, late + 0.25]                  # not asked for before: not recalled
+    got_third = [third.kinematics(x) for x in other_times]
     assert steps[0] == ck.BLOCK                                # the third block alone
-    for got in (got_first, got_second, got_third):
-        for part, want_part in zip(got, want, strict=True):
+    want_third = [alone.kinematics(x) for x in other_times]
+    for got, want_of in ((got_first, want), (got_second, want), (got_third, want_third)):
+        for part, want_part in zip(got, want_of, strict=True):
             for key, value in want_part.items():
                 assert np.array_equal(part[key], value), key
+
+
+def test_tracks_of_one_configuration_share_their_kinematics_bit_for_bit(monkeypatch):
+    """Kinematics a track of the configuration computed at the same times are recalled by
+    another, without integrating: the numbers of a track made alone, bit for bit, as copies (a
+    caller's change to them is not recalled). Nothing is stored while there is one track; the
+    oldest go when the store is full, and a set larger than it is never stored."""
+    import alignment_core.ship.manoeuvring.course_keeping as ck
+    steps = [0]
+
+    def counted(*args):
+        steps[0] += 1
+        return rk4_step(*args)
+    monkeypatch.setattr(ck, 'rk4_step', counted)
+    rmax = math.radians(35.0)
+    parts = (MmgModel(CARRIER), Autopilot(2.0, 0.01, 60.0, rmax), SteeringGear(rmax, math.radians(2.5), 2.0),
+             CourseSchedule(math.radians(30.0), 20 * 0.514444, 100.0, math.radians(60.0)),
+             math.radians(40.0), math.radians(116.0), 0.5)
+    times = [np.linspace(0.0, 300.0, 3001), np.linspace(0.05, 300.05, 3001), np.linspace(0.1, 300.1, 3001)]
+    alone = ManoeuvringTrack(*parts, warmup=60.0)
+    want = [alone.kinematics(t) for t in times]
+    shared = ck.SharedStart()
+    first = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
+    first.kinematics(times[0])
+    assert not shared.kinematics                               # one track: nothing kept
+    second = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
+    got = [second.kinematics(t) for t in times[:2]]            # computed and stored
+    assert len(shared.kinematics) == 2
+    got[0]['lat'][:] = 0.0                                     # the computing caller's arrays
+    steps[0] = 0
+    third = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
+    again = [third.kinematics(t) for t in times[:2]]
+    assert steps[0] == 0                                       # recalled: nothing integrated
+    for part, want_part in zip(again, want[:2], strict=True):
+        assert part.keys() == want_part.keys()
+        for key, value in want_part.items():
+            assert np.array_equal(part[key], value), key
+    again[0]['lat'][:] = 0.0                                   # a recalled copy
+    assert np.array_equal(third.kinematics(times[0])['lat'], want[0]['lat'])
+    one = len(times[0].tobytes()) + sum(a.nbytes for a in want[0].values())
+    monkeypatch.setattr(ck, 'SHARED_KINEMATICS_BYTES', 2 * one)
+    third.kinematics(times[2])                                 # the third set: the oldest goes
+    assert list(shared.kinematics) == [times[1].tobytes(), times[2].tobytes()]
+    monkeypatch.setattr(ck, 'SHARED_KINEMATICS_BYTES', one - 1)
+    fresh = ck.SharedStart()
+    fresh.users = 2
+    fresh.store_kinematics(times[0].tobytes(), want[0])        # larger than the store: not kept
+    assert not fresh.kinematics
 
 
 def test_make_track_shares_a_start_per_configuration_and_keeps_a_few():

@@ -25,12 +25,14 @@ The grid extends lazily (blocks of `BLOCK` steps) as later times are asked for: 
 of the evaluation gives the same numbers. Only the recent steps are kept (KEEP before the least
 time read), so a node's track holds a bounded history however long it runs. The tracks of one
 configuration may share their start (`SharedStart`: the warm-up and the first blocks, integrated
-once): a Monte Carlo's runs differ in their sea, never in their track.
+once) and their kinematics at times asked for before: a Monte Carlo's runs differ in their sea,
+never in their track.
 """
 from __future__ import annotations
 
 import math
 import threading
+from collections import OrderedDict
 
 import numpy as np
 
@@ -48,6 +50,10 @@ the spectral motion's knot blocks (25.6 s) reach back before the times a node as
 
 SHARED_BLOCKS = 8
 """Blocks of a track's start (68 min at 0.5 s steps) that the tracks of a configuration share."""
+
+SHARED_KINEMATICS_BYTES = 32 * 2**20
+"""The kinematics the tracks of a configuration share, at most (their times and arrays): a 300 s
+run at 100 Hz asks for about 4 MB."""
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _GL_U = 0.5 * (_GL_X + 1.0)                   # nodes on [0, 1]
@@ -128,7 +134,28 @@ class SharedStart:
         self.users = 0                                # tracks made with it
         self.warm: tuple[tuple[float, ...], tuple[float, float]] | None = None
         self.blocks: list[tuple[tuple[float, ...], tuple[float, ...], np.ndarray, np.ndarray]] = []
+        self.kinematics: OrderedDict[bytes, dict[str, np.ndarray]] = OrderedDict()   # by the times' bytes
+        self._kinematics_bytes = 0
         self._lock = threading.Lock()
+
+    def recall_kinematics(self, key: bytes) -> dict[str, np.ndarray] | None:
+        """Copies of the kinematics stored at the times whose float64 bytes are `key`, or None."""
+        with self._lock:
+            kin = self.kinematics.get(key)
+            return None if kin is None else {k: a.copy() for k, a in kin.items()}
+
+    def store_kinematics(self, key: bytes, kin: dict[str, np.ndarray]) -> None:
+        """Keep a copy of a track's kinematics at the times `key`, if another track may ask for
+        them; the oldest go beyond SHARED_KINEMATICS_BYTES."""
+        size = len(key) + sum(a.nbytes for a in kin.values())
+        with self._lock:
+            if self.users < 2 or key in self.kinematics or size > SHARED_KINEMATICS_BYTES:
+                return
+            self.kinematics[key] = {k: a.copy() for k, a in kin.items()}
+            self._kinematics_bytes += size
+            while self._kinematics_bytes > SHARED_KINEMATICS_BYTES:
+                old_key, old = self.kinematics.popitem(last=False)
+                self._kinematics_bytes -= len(old_key) + sum(a.nbytes for a in old.values())
 
     def store_warm(self, y: list[float], offset: tuple[float, float]) -> None:
         """Keep the state after the warm-up and its offset, if another track may replay them."""
@@ -278,6 +305,12 @@ class ManoeuvringTrack:
         (N, 3)), 'psi', 'psi_dot', 'psi_ddot' (heading from North clockwise), 'phi',
         'phi_dot', 'phi_ddot' (roll, starboard down), 'lat', 'lon' (rad)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
+        shared, key = self._shared, b''
+        if shared is not None:                       # another track of the configuration may have them
+            key = t.tobytes()
+            recalled = shared.recall_kinematics(key)
+            if recalled is not None:
+                return recalled
         if len(t):
             self._ensure(float(np.max(t)))
         h = self.h
@@ -301,8 +334,11 @@ class ManoeuvringTrack:
         a_n = np.zeros((n, 3))
         v_n[:, 0], v_n[:, 1] = d1[:, 1], d1[:, 0]
         a_n[:, 0], a_n[:, 1] = d2[:, 1], d2[:, 0]
-        return {'north': north, 'east': east, 'v_n': v_n, 'a_n': a_n,
-                'psi': val[:, 2], 'psi_dot': d1[:, 2], 'psi_ddot': d2[:, 2],
-                'phi': val[:, 3], 'phi_dot': d1[:, 3], 'phi_ddot': d2[:, 3],
-                'lat': lat, 'lon': lon}
+        kin = {'north': north, 'east': east, 'v_n': v_n, 'a_n': a_n,
+               'psi': val[:, 2], 'psi_dot': d1[:, 2], 'psi_ddot': d2[:, 2],
+               'phi': val[:, 3], 'phi_dot': d1[:, 3], 'phi_ddot': d2[:, 3],
+               'lat': lat, 'lon': lon}
+        if shared is not None:
+            shared.store_kinematics(key, kin)
+        return kin
 
