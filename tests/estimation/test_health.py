@@ -125,7 +125,7 @@ def test_the_health_check_refuses_each_kind_of_breakdown_and_only_those(dtype):
 @pytest.mark.parametrize('dtype', [np.float64, np.float32])
 def test_finite_refuses_any_non_finite_element_of_any_array(dtype):
     """A NaN or an inf in any element of any argument (vectors, matrices, non-contiguous views,
-    lists) is not finite; large finite matrices whose sum would overflow are. The compiled check
+    lists) is not finite; large finite vectors and matrices whose sum would overflow are. The compiled check
     of one array agrees with its interpreted form and with numpy's isfinite."""
     big = np.finfo(dtype).max
     ok = (np.ones(3, dtype), np.ones((6, 6), dtype), np.ones(21, dtype), np.full((3, 3), big, dtype))
@@ -141,6 +141,9 @@ def test_finite_refuses_any_non_finite_element_of_any_array(dtype):
     assert not health.finite(np.diagonal(m)) and not health.finite(m[1::2, 1::2]) and not health.finite(m.T)
     assert health.finite(m[::2, ::2])                 # a view that misses the NaN
     assert not health.finite([1.0, np.inf])
+    huge = np.array([big, big, 0.0], dtype)            # finite, though its sum overflows
+    assert health.finite(huge) and health.finite(np.ones(3, dtype), huge, -huge)
+    assert not health.finite(huge, np.array([0.0, np.nan, 0.0], dtype))
     rng = np.random.default_rng(1)
     for _ in range(50):
         a = rng.standard_normal((4, 5)).astype(dtype)

@@ -63,6 +63,8 @@ def test_imu_beyond_full_scale_is_rejected_per_axis():
     assert imu_reason(dataclasses.replace(ok, gyro=np.array([0.0, -401.0 * DEG, 0.0])), LIM) == 'range'
     assert imu_reason(dataclasses.replace(ok, accel=np.array([16.1 * G0, 0.0, 0.0])), LIM) == 'range'
     assert imu_reason(dataclasses.replace(ok, accel=np.array([1e30, 0.0, 0.0])), LIM) == 'range'
+    huge = np.array([1e308, 1e308, 0.0])             # finite: out of range, though its sum overflows
+    assert imu_reason(dataclasses.replace(ok, accel=huge), LIM) == 'range'
     assert imu_reason(dataclasses.replace(ok, accel=np.array([np.nan, 0.0, 0.0])), LIM) == 'nonfinite'
 
 
