@@ -4,23 +4,35 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from alignment_core.estimation.matching import reference_velocities
+from alignment_core.estimation.matching import DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED, reference_velocities
 
 
 def test_reference_velocities_are_the_rigid_body_velocity_of_the_spot():
     """A point at lever arm r on a body turning at w_b moves at v_b + w_b x r (plus the LDV's
     relative velocity), in nav axes through C_m: against scipy's rotation matrix and numpy's
-    cross product; the compiled kernel equals its interpreted form bit for bit."""
+    cross product. The lever arm is the deck displacement alone, after the surveyed spot, or
+    after the spot and its correction, with numpy's sums; a beam is rotated into nav axes by C_m.
+    The compiled kernel equals its interpreted form bit for bit."""
     rng = np.random.default_rng(5)
-    for _ in range(50):
+    for k in range(60):
         q = Rotation.random(random_state=rng).as_quat()
         w_b, v_b = rng.normal(0.0, 0.05, 3), rng.normal(0.0, 10.0, 3)
-        r, v_rel = rng.normal(0.0, 50.0, 3), rng.normal(0.0, 1.0, 3)
-        c_m, u_n, v_ref = reference_velocities(q, w_b, v_b, r, v_rel)
+        r0, dr, disp, v_rel = rng.normal(0.0, 50.0, 3), rng.normal(0.0, 0.1, 3), rng.normal(0.0, 5.0, 3), \
+            rng.normal(0.0, 1.0, 3)
+        arm = (DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED)[k % 3]
+        beam = rng.normal(0.0, 1.0, 3) if k % 2 else np.empty(0)
+        args = (q, w_b, v_b, r0, dr, disp, arm, v_rel, beam)
+        c_m, r, u_n, v_ref, beam_n = reference_velocities(*args)
+        r_true = (disp, r0 + disp, r0 + dr + disp)[arm]
+        assert r.tobytes() == r_true.tobytes() and r is not disp
         c_true = Rotation.from_quat(q).as_matrix()
-        u_true = c_true @ (np.cross(w_b, r) + v_rel)
+        u_true = c_true @ (np.cross(w_b, r_true) + v_rel)
         np.testing.assert_allclose(c_m, c_true, rtol=0.0, atol=1e-15)
         np.testing.assert_allclose(u_n, u_true, rtol=0.0, atol=1e-12)
         np.testing.assert_allclose(v_ref, c_true @ v_b + u_true, rtol=0.0, atol=1e-12)
-        for got, want in zip((c_m, u_n, v_ref), reference_velocities.py_func(q, w_b, v_b, r, v_rel)):
+        if k % 2:
+            np.testing.assert_allclose(beam_n, c_true @ beam, rtol=0.0, atol=1e-15)
+        else:
+            assert beam_n.shape == (0,)
+        for got, want in zip((c_m, r, u_n, v_ref, beam_n), reference_velocities.py_func(*args), strict=True):
             assert got.tobytes() == want.tobytes()

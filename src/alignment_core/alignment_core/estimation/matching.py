@@ -33,6 +33,8 @@ from alignment_core.units import DEG
 from alignment_core.validation import ConfigError
 
 Past = tuple[NavState, np.ndarray | None]       # the slave at a validity time, Phi from there to now
+DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED = 0, 1, 2   # what the reference's lever arm adds to the deck's displacement
+_NONE = np.empty(0)                                  # no beam, as the kernel takes it
 Extras = tuple[np.ndarray, np.ndarray | None, RateInputs | None]   # (w_n, a_n, rate) of a Match
 
 
@@ -107,7 +109,11 @@ class Matcher:
         self._layers = layers_of(model)      # velocity matching and its layers: match_step.py
         self._counters = counters
         self._compensate = cfg.lever_arm_treatment == 'compensation'
-        self._r0 = np.asarray(cfg.lever_arm_m, dtype=float)
+        self._r0 = np.array(cfg.lever_arm_m, dtype=np.float64)
+        # the lever arm put into the reference (ship axes): the surveyed spot (plus the estimated
+        # correction) under compensation, and the LDV-integrated deck displacement
+        self._arm = (DISPLACEMENT if not self._compensate else
+                     SURVEYED_CORRECTED if cfg.lever_arm_states else SURVEYED)
         self._lowpass: ButterworthLowPass | None = None
         if cfg.lever_arm_treatment == 'butterworth':
             if not cfg.butterworth_cutoff_hz < 0.5 * imu_rate_hz:
@@ -174,22 +180,14 @@ class Matcher:
         place it there after a gap), else the one the matches use."""
         moving = ldv is not None and ldv.moving
         disp = ldv.disp if ldv is not None else deck_disp
-        r = self._r0 + self.results.corr.dr + disp if surveyed else self._lever_arm(disp)
         beam = ldv.beam if ldv is not None and ldv.valid else None
         # a beam LDV is the measurement parked too (its one row); a vector one only once moving
         v_rel = ldv.v_s if (ldv is not None and ldv.valid and (moving or beam is not None)) else np.zeros(3)
-        c_m, u_n, v_ref = reference_velocities(as_float64(m.q_nb), as_float64(m.w_b), as_float64(m.v_b),
-                                               as_float64(r), as_float64(v_rel))
-        return Reference(c_m, r, v_rel, u_n, v_ref, moving, None if beam is None else c_m @ beam)
-
-    def _lever_arm(self, deck_disp: np.ndarray) -> np.ndarray:
-        """The lever arm put into the reference (ship axes): the surveyed spot (plus the
-        estimated correction) under compensation, and the LDV-integrated deck displacement."""
-        if not self._compensate:
-            return deck_disp
-        if self._cfg.lever_arm_states:
-            return self._r0 + self.results.corr.dr + deck_disp
-        return self._r0 + deck_disp
+        arm = SURVEYED_CORRECTED if surveyed else self._arm
+        c_m, r, u_n, v_ref, beam_n = reference_velocities(
+            as_float64(m.q_nb), as_float64(m.w_b), as_float64(m.v_b), self._r0, as_float64(self.results.corr.dr),
+            as_float64(disp), arm, as_float64(v_rel), _NONE if beam is None else as_float64(beam))
+        return Reference(c_m, r, v_rel, u_n, v_ref, moving, None if beam is None else beam_n)
 
     def extras(self, live: LiveSolution, t_v: int, m: MasterSample, ref: Reference) -> Extras:
         """(w_n, a_n, rate inputs) for the delay state and rate matching (models/master_delay.py,
@@ -379,12 +377,23 @@ class Matcher:
 
 
 @kernel
-def reference_velocities(q_nb, w_b, v_b, r, v_rel):
-    """(C_m (3, 3), u_n = C_m (w_b x r + v_rel), v_ref = C_m v_b + u_n) of a master sample's
-    quaternion q_nb (4,), body rate w_b and velocity v_b (3,), with the lever arm r and the LDV
-    velocity v_rel (3,, ship axes): the reference's attitude, the spot's velocity relative to the
-    master and the velocity the slave should have. One kernel for what were six numpy calls."""
+def reference_velocities(q_nb, w_b, v_b, r0, dr, disp, arm, v_rel, beam):
+    """(C_m (3, 3), the lever arm r, u_n = C_m (w_b x r + v_rel), v_ref = C_m v_b + u_n, C_m beam)
+    of a master sample's quaternion q_nb (4,), body rate w_b and velocity v_b (3,), with the LDV
+    velocity v_rel and its line of sight beam (3,, ship axes; empty for a vector LDV: an empty
+    result): the reference's attitude, the spot's velocity relative to the master, the velocity
+    the slave should have and the beam in nav axes. The lever arm (ship axes) is the deck
+    displacement disp (3,) alone (arm DISPLACEMENT), after the surveyed spot r0 (SURVEYED) or
+    after r0 and its estimated correction dr (SURVEYED_CORRECTED: (r0 + dr) + disp). One kernel
+    for what were ten numpy calls."""
+    if arm == DISPLACEMENT:
+        r = disp.copy()
+    elif arm == SURVEYED:
+        r = r0 + disp
+    else:
+        r = r0 + dr + disp
     c_m = np.array(quat_to_dcm_k((q_nb[0], q_nb[1], q_nb[2], q_nb[3]))).reshape(3, 3)
-    arm = np.array(cross_k((w_b[0], w_b[1], w_b[2]), (r[0], r[1], r[2]))) + v_rel
-    u_n = np.dot(c_m, arm)
-    return c_m, u_n, np.dot(c_m, v_b) + u_n
+    rel = np.array(cross_k((w_b[0], w_b[1], w_b[2]), (r[0], r[1], r[2]))) + v_rel
+    u_n = np.dot(c_m, rel)
+    beam_n = np.dot(c_m, beam) if beam.shape[0] == 3 else np.empty(0)
+    return c_m, r, u_n, np.dot(c_m, v_b) + u_n, beam_n
