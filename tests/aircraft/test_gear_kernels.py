@@ -91,3 +91,45 @@ def test_stepping_is_the_numpy_loop_bit_for_bit(spring):
     want = _reference(resp, resp.model.inertial_load(f, wdot, resp.f0))
     assert np.array_equal(np.hstack([q, qd, qdd]), want)
     assert np.abs(resp.model.strut_compression(q)).max() > 1e-3          # the springs were worked
+
+
+def _motion_reference(resp: GearResponse, tau: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The numpy form GearResponse.imu_motion had: each node's samples read and interpolated alone."""
+    x = tau * resp.rate_hz
+    k = np.floor(x + 1e-9).astype(np.int64)
+    u = x - k
+    at_sample = np.abs(u) < 1e-9
+    u = np.where(at_sample, 0.0, u)[..., None]
+    d0, v0, a0 = resp.imu_at(k)
+    d1, v1, a1 = resp.imu_at(np.where(at_sample, k, k + 1))
+    h = resp.dt
+    u2, u3, u4, u5 = u * u, u**3, u**4, u**5
+    pos = ((1 - 10*u3 + 15*u4 - 6*u5) * d0 + (u - 6*u3 + 8*u4 - 3*u5) * h * v0
+           + 0.5 * (u2 - 3*u3 + 3*u4 - u5) * h * h * a0 + (10*u3 - 15*u4 + 6*u5) * d1
+           + (-4*u3 + 7*u4 - 3*u5) * h * v1 + 0.5 * (u3 - 2*u4 + u5) * h * h * a1)
+    vel = ((-30*u2 + 60*u3 - 30*u4) * d0 / h + (1 - 18*u2 + 32*u3 - 15*u4) * v0
+           + 0.5 * (2*u - 9*u2 + 12*u3 - 5*u4) * h * a0 + (30*u2 - 60*u3 + 30*u4) * d1 / h
+           + (-12*u2 + 28*u3 - 15*u4) * v1 + 0.5 * (3*u2 - 8*u3 + 5*u4) * h * a1)
+    acc = ((-60*u + 180*u2 - 120*u3) * d0 / (h * h) + (-36*u + 96*u2 - 60*u3) * v0 / h
+           + 0.5 * (2 - 18*u + 36*u2 - 20*u3) * a0 + (60*u - 180*u2 + 120*u3) * d1 / (h * h)
+           + (-24*u + 84*u2 - 60*u3) * v1 / h + 0.5 * (6*u - 24*u2 + 20*u3) * a1)
+    s = at_sample[..., None]
+    return np.where(s, d0, pos), np.where(s, v0, vel), np.where(s, a0, acc)
+
+
+def test_imu_motion_is_the_per_node_numpy_form_bit_for_bit():
+    """imu_motion reads each row's samples once and interpolates in gear_response.quintic_hermite:
+    the numbers of the per-node numpy form, for Gauss nodes inside intervals (the increments'),
+    rows mixing sample instants and nodes, nodes of different intervals in one row, and scalars."""
+    resp = GearResponse(CFG, seed=2, rate_hz=100.0, f0=np.array([0.0, 0.0, G0]))
+    rng = np.random.default_rng(8)
+    n = 300
+    resp.feed(np.arange(n), np.array([0.0, 0.0, G0]) + rng.normal(0.0, 0.3, (n, 3)), rng.normal(0.0, 0.05, (n, 3)))
+    k = np.arange(1, n - 2)
+    nodes = (k[:, None] + np.array([0.1127016653792583, 0.5, 0.8872983346207417])) / 100.0
+    mixed = np.stack([k / 100.0, (k + 0.25) / 100.0], axis=1)
+    spread = np.stack([(k + 0.5) / 100.0, (k + 1.5) / 100.0], axis=1)
+    for tau in (nodes, mixed, spread, np.array(1.234), k / 100.0):
+        got, want = resp.imu_motion(tau), _motion_reference(resp, tau)
+        for g, w in zip(got, want):
+            assert g.shape == w.shape and g.tobytes() == w.tobytes()

@@ -38,23 +38,29 @@ class GearOnDeck:
         f0 = np.array([0.0, 0.0, float(earth.gravity(lat0, self.r_cg[2]))])
         self.response = GearResponse(cfg, seed, rate_hz, f0, holdback)
 
-    def feed(self, sb: ShipBatch, tau: np.ndarray) -> None:
+    def feed(self, sb: ShipBatch, tau: np.ndarray, c_nb: np.ndarray | None = None,
+             c_lw: np.ndarray | None = None) -> None:
         """Simulate the gear through these deck samples (tau: their scenario times): the specific
         force at the rigidly mounted CG and the deck's angular acceleration, in the gear's axes.
         Samples already simulated are skipped before their loads are computed (the increments
-        feed the samples the truth fed before them)."""
+        feed the samples the truth fed before them). c_nb, c_lw (K, 3, 3): the samples' C_b^n and
+        plane.c_local_to_world of their positions, if the caller has them."""
         k = self.response.index(tau)
         new = k >= self.response.n
         if not np.any(new):
             return
         if not np.all(new):
             sb, k = sb.slice(new), k[new]
-        c_nb = quat_to_dcm_batch(sb.q_nb)
+            c_nb = None if c_nb is None else c_nb[new]
+            c_lw = None if c_lw is None else c_lw[new]
+        if c_nb is None:
+            c_nb = quat_to_dcm_batch(sb.q_nb)
+        if c_lw is None:
+            c_lw = self.plane.c_local_to_world(sb.p_w)
         wxr = cross(sb.w_b, self.r_cg)
         v_p = np.einsum('kij,kj->ki', c_nb, sb.v_b + wxr)
         a_p = np.einsum('kij,kj->ki', c_nb, sb.a_b + cross(sb.wdot_b, self.r_cg) + cross(sb.w_b, wxr))
-        p_p = sb.p_w + np.einsum('kij,kj->ki', self.plane.c_local_to_world(sb.p_w),
-                                 np.einsum('kij,j->ki', c_nb, self.r_cg))
+        p_p = sb.p_w + np.einsum('kij,kj->ki', c_lw, np.einsum('kij,j->ki', c_nb, self.r_cg))
         _, f_s = self.imu(c_nb, sb.w_b, v_p, a_p, p_p)                   # ship axes
         self.response.feed(k, np.einsum('ji,kj->ki', self.c_ds, f_s),
                            np.einsum('ji,kj->ki', self.c_ds, sb.wdot_b))

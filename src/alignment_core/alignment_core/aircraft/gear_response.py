@@ -180,19 +180,24 @@ class GearResponse:
 
     def states(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """q, q', q'' (..., 9) at simulated sample indices k (...)."""
+        k = self._simulated(k)
+        return self._q[k], self._qd[k], self._qdd[k]
+
+    def _simulated(self, k) -> np.ndarray:
+        """Sample indices k as int64, checked to be simulated."""
         k = np.asarray(k, dtype=np.int64)
         if k.size and (k.min() < 0 or k.max() >= self._n):
             raise RuntimeError(f"gear sample {int(k.max())} not simulated yet ({self._n} so far): "
                                "the aircraft truth feeds the gear before the increments use it")
-        return self._q[k], self._qd[k], self._qdd[k]
+        return k
 
     def index(self, tau) -> np.ndarray:
         return np.rint(np.asarray(tau, dtype=float) * self.rate_hz).astype(np.int64)
 
     def rotation_at(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """theta, theta' (..., 3) of the airframe at sample indices k."""
-        q, qd, _ = self.states(k)
-        return q[..., 3:6], qd[..., 3:6]
+        k = self._simulated(k)
+        return self._q[k][..., 3:6], self._qd[k][..., 3:6]
 
     def imu_at(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The IMU point's displacement, velocity and acceleration (..., 3) at sample indices k."""
@@ -201,29 +206,58 @@ class GearResponse:
 
     def imu_motion(self, tau) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The IMU point's displacement, velocity, acceleration (..., 3) at scenario times tau
-        (...): the samples' values at sample instants, the quintic Hermite in between."""
+        (...): the samples' values at sample instants, the quintic Hermite in between. The
+        samples' motion is read once per row of tau (the last axis) whose times share a sample."""
         x = np.asarray(tau, dtype=float) * self.rate_hz
         k = np.floor(x + _SAMPLE_TOL).astype(np.int64)
         u = x - k
         at_sample = np.abs(u) < _SAMPLE_TOL
-        u = np.where(at_sample, 0.0, u)[..., None]
-        d0, v0, a0 = self.imu_at(k)
         if np.all(at_sample):
-            return d0, v0, a0
-        d1, v1, a1 = self.imu_at(np.where(at_sample, k, k + 1))
-        h = self.dt
-        u2, u3, u4, u5 = u * u, u**3, u**4, u**5
-        pos = ((1 - 10*u3 + 15*u4 - 6*u5) * d0 + (u - 6*u3 + 8*u4 - 3*u5) * h * v0
-               + 0.5 * (u2 - 3*u3 + 3*u4 - u5) * h * h * a0 + (10*u3 - 15*u4 + 6*u5) * d1
-               + (-4*u3 + 7*u4 - 3*u5) * h * v1 + 0.5 * (u3 - 2*u4 + u5) * h * h * a1)
-        vel = ((-30*u2 + 60*u3 - 30*u4) * d0 / h + (1 - 18*u2 + 32*u3 - 15*u4) * v0
-               + 0.5 * (2*u - 9*u2 + 12*u3 - 5*u4) * h * a0 + (30*u2 - 60*u3 + 30*u4) * d1 / h
-               + (-12*u2 + 28*u3 - 15*u4) * v1 + 0.5 * (3*u2 - 8*u3 + 5*u4) * h * a1)
-        acc = ((-60*u + 180*u2 - 120*u3) * d0 / (h * h) + (-36*u + 96*u2 - 60*u3) * v0 / h
-               + 0.5 * (2 - 18*u + 36*u2 - 20*u3) * a0 + (60*u - 180*u2 + 120*u3) * d1 / (h * h)
-               + (-24*u + 84*u2 - 60*u3) * v1 / h + 0.5 * (6*u - 24*u2 + 20*u3) * a1)
-        s = at_sample[..., None]
-        return np.where(s, d0, pos), np.where(s, v0, vel), np.where(s, a0, acc)
+            return self.imu_at(k)
+        u = np.where(at_sample, 0.0, u)
+        shape = u.shape
+        if u.ndim and np.all(k == k[..., :1]):
+            k, u, at_sample = k[..., 0].reshape(-1), u.reshape(-1, shape[-1]), at_sample.reshape(-1, shape[-1])
+        else:
+            k, u, at_sample = k.reshape(-1), u.reshape(-1, 1), at_sample.reshape(-1, 1)
+        ends = self.imu_at(k) + self.imu_at(np.where(np.all(at_sample, axis=1), k, k + 1))
+        out = quintic_hermite(u, u**3, u**4, u**5, at_sample, *ends, self.dt)
+        return out[0].reshape(shape + (3,)), out[1].reshape(shape + (3,)), out[2].reshape(shape + (3,))
+
+
+@kernel
+def quintic_hermite(u, u3, u4, u5, at_sample, d0, v0, a0, d1, v1, a1, h):
+    """Position, velocity, acceleration (3, M, J, 3) at the fractions u (M, J) of sample
+    intervals h long from the quintic Hermite through the samples' (d, v, a) (M, 3) at their
+    start (0) and end (1); at_sample: the start's own values. u3, u4, u5: numpy's powers of u
+    (its SIMD power rounds unlike the C library's); each product and sum in numpy's order."""
+    m, n = u.shape
+    out = np.empty((3, m, n, 3))
+    hh = h * h
+    for i in range(m):
+        for j in range(n):
+            if at_sample[i, j]:
+                out[0, i, j], out[1, i, j], out[2, i, j] = d0[i], v0[i], a0[i]
+                continue
+            s1, s3, s4, s5 = u[i, j], u3[i, j], u4[i, j], u5[i, j]
+            s2 = s1 * s1
+            p0, p1 = 1 - 10*s3 + 15*s4 - 6*s5, (s1 - 6*s3 + 8*s4 - 3*s5) * h
+            p2, p3 = 0.5 * (s2 - 3*s3 + 3*s4 - s5) * h * h, 10*s3 - 15*s4 + 6*s5
+            p4, p5 = (-4*s3 + 7*s4 - 3*s5) * h, 0.5 * (s3 - 2*s4 + s5) * h * h
+            q0, q1 = -30*s2 + 60*s3 - 30*s4, 1 - 18*s2 + 32*s3 - 15*s4
+            q2, q3 = 0.5 * (2*s1 - 9*s2 + 12*s3 - 5*s4) * h, 30*s2 - 60*s3 + 30*s4
+            q4, q5 = -12*s2 + 28*s3 - 15*s4, 0.5 * (3*s2 - 8*s3 + 5*s4) * h
+            r0, r1 = -60*s1 + 180*s2 - 120*s3, -36*s1 + 96*s2 - 60*s3
+            r2, r3 = 0.5 * (2 - 18*s1 + 36*s2 - 20*s3), 60*s1 - 180*s2 + 120*s3
+            r4, r5 = -24*s1 + 84*s2 - 60*s3, 0.5 * (6*s1 - 24*s2 + 20*s3)
+            for c in range(3):
+                out[0, i, j, c] = (p0 * d0[i, c] + p1 * v0[i, c] + p2 * a0[i, c] + p3 * d1[i, c]
+                                   + p4 * v1[i, c] + p5 * a1[i, c])
+                out[1, i, j, c] = (q0 * d0[i, c] / h + q1 * v0[i, c] + q2 * a0[i, c] + q3 * d1[i, c] / h
+                                   + q4 * v1[i, c] + q5 * a1[i, c])
+                out[2, i, j, c] = (r0 * d0[i, c] / hh + r1 * v0[i, c] / h + r2 * a0[i, c]
+                                   + r3 * d1[i, c] / hh + r4 * v1[i, c] / h + r5 * a1[i, c])
+    return out
 
 
 @kernel

@@ -48,14 +48,15 @@ from alignment_core.aircraft.catapult import CatapultMotion, check_catapult_grid
 from alignment_core.aircraft.deck_flexure import FlexureProcess
 from alignment_core.aircraft.flight import FlightPath, airborne_start
 from alignment_core.aircraft.gear_on_deck import GearOnDeck
+from alignment_core.aircraft.interval_hermite import hermite_basis, hermite_nodes
 from alignment_core.aircraft.vibration import Vibration
 from alignment_core.geometry import earth
+from alignment_core.geometry.rotation_stacks import products, right_jacobians, rotated
 from alignment_core.geometry.rotations import (
     cross,
     quat_mul_batch,
     quat_to_dcm_batch,
     relative_rotvec_batch,
-    right_jacobian,
     rotvec_to_dcm_batch,
     rows_matmul,
 )
@@ -67,6 +68,7 @@ __all__ = ['AircraftKinematics']
 
 GL_NODES = np.array([0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6)])
 GL_WEIGHTS = np.array([5.0, 8.0, 5.0]) / 18.0
+HERMITE = hermite_basis(GL_NODES)
 
 
 class AircraftKinematics:
@@ -128,7 +130,10 @@ class AircraftKinematics:
         return tf + th, tfd + thd
 
     def _c_sa(self, flex):
-        return self.c_sa if flex is None else self.c_sa @ rotvec_to_dcm_batch(flex[0])
+        if flex is None:
+            return self.c_sa
+        th = flex[0]
+        return rotated(self.c_sa[None], th.reshape(1, -1, 3)).reshape(th.shape + (3,))
 
     def relative(self, tau: np.ndarray, vib_acc: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """r, r', r'' (..., 3) in ship axes at times tau (...) (s since scenario start), on deck.
@@ -154,25 +159,27 @@ class AircraftKinematics:
             rdd = rdd + rows_matmul(vib.acc(tau), self.c_sa.T)
         return r + rows_matmul(vib.pos(tau), self.c_sa.T), rd, rdd
 
-    def _on_deck(self, c_nb, w, wd, v_n, a_n, p_w, tau, flex=None, vib_acc=True):
+    def _on_deck(self, c_nb, w, wd, v_n, a_n, p_w, tau, flex=None, vib_acc=True, c_lw=None):
         """Aircraft nav quantities on the deck; leading dims (...) of tau, vectors (..., 3);
-        flex = (theta, theta') (..., 3) of the deck flexure or None."""
+        flex = (theta, theta') (..., 3) of the deck flexure or None; c_lw: the local-to-world
+        rotations at p_w if already made."""
         r, rd, rdd = self.relative(tau, vib_acc)
         wxr = cross(w, r)
         v_p = v_n + np.einsum('...ij,...j->...i', c_nb, wxr + rd)
         a_rel = cross(wd, r) + cross(w, wxr) + 2.0 * cross(w, rd) + rdd
         a_p = a_n + np.einsum('...ij,...j->...i', c_nb, a_rel)
         # C r is in the local-level frame at the ship; p_w in the world tangent plane
-        p_p = p_w + np.einsum('...ij,...j->...i', self.plane.c_local_to_world(p_w),
-                              np.einsum('...ij,...j->...i', c_nb, r))
+        if c_lw is None:
+            c_lw = self.plane.c_local_to_world(p_w)
+        p_p = p_w + np.einsum('...ij,...j->...i', c_lw, np.einsum('...ij,...j->...i', c_nb, r))
         if flex is None:
             c_na = c_nb @ self.c_sa                                      # C_a^n
             w_na = rows_matmul(w, self.c_sa)                             # C_s^a w (row form)
         else:
             c_sa = self._c_sa(flex)
-            c_na = c_nb @ c_sa
+            c_na = products(c_nb, c_sa)
             w_na = (np.einsum('...ji,...j->...i', c_sa, w)
-                    + np.einsum('...ij,...j->...i', right_jacobian(flex[0]), flex[1]))
+                    + np.einsum('...ij,...j->...i', right_jacobians(flex[0]), flex[1]))
         return c_na, w_na, v_p, a_p, p_p
 
     def _check_released(self) -> None:
@@ -205,25 +212,27 @@ class AircraftKinematics:
         tau = np.asarray(tau, dtype=float)
         c_nb = quat_to_dcm_batch(sb.q_nb)
         on = tau <= self.release
-        if self.gear is not None and np.any(on):
-            self.gear.feed(sb.slice(on), tau[on])
         c_na = np.empty((len(tau), 3, 3))
         w_na = np.zeros((len(tau), 3))
         v_p = np.empty((len(tau), 3))
         p_p = np.empty((len(tau), 3))
+        flex = None
         if np.any(on):
-            v_n = np.einsum('kij,kj->ki', c_nb[on], sb.v_b[on])
-            a_n = np.einsum('kij,kj->ki', c_nb[on], sb.a_b[on])
+            c_on, p_on = c_nb[on], sb.p_w[on]
+            c_lw = self.plane.c_local_to_world(p_on)
+            if self.gear is not None:
+                self.gear.feed(sb.slice(on), tau[on], c_on, c_lw)
+            v_n = np.einsum('kij,kj->ki', c_on, sb.v_b[on])
+            a_n = np.einsum('kij,kj->ki', c_on, sb.a_b[on])
             flex = self._flex_at(tau[on])
             c_na[on], w_na[on], v_p[on], _, p_p[on] = self._on_deck(
-                c_nb[on], sb.w_b[on], sb.wdot_b[on], v_n, a_n, sb.p_w[on], tau[on], flex)
+                c_on, sb.w_b[on], sb.wdot_b[on], v_n, a_n, p_on, tau[on], flex, c_lw=c_lw)
         if not self.has_rot:
             q_sa = self.q_sa
         else:
             q_sa = np.broadcast_to(self.q_sa, (len(tau), 4)).copy()
-            if np.any(on):
-                th = self._flex_at(tau[on])[0]
-                q_sa[on] = quat_mul_batch(self.q_sa, Rotation.from_rotvec(th).as_quat())
+            if flex is not None:
+                q_sa[on] = quat_mul_batch(self.q_sa, Rotation.from_rotvec(flex[0]).as_quat())
         q = quat_mul_batch(sb.q_nb, q_sa)
         if np.any(on):
             rel = np.flatnonzero(tau == self.release)
@@ -273,30 +282,18 @@ class AircraftKinematics:
                 w_ib[free], f[free] = 0.0, 0.0                           # replaced below
         deck = ~free
         if np.any(deck):
-            hk = h[deck][:, None, None]                                  # (K, 1, 1)
+            hk = np.ascontiguousarray(h[deck])
             a = s0.slice(deck) if not np.all(deck) else s0
             b = s1.slice(deck) if not np.all(deck) else s1
             c0, c1 = quat_to_dcm_batch(a.q_nb), quat_to_dcm_batch(b.q_nb)
-            # cubic Hermite basis, its derivative and its integral from 0 to u; shape (1, J, 1)
-            uu = u[None, :, None]
-            h00, h10, h01, h11 = 2*uu**3 - 3*uu**2 + 1, uu**3 - 2*uu**2 + uu, -2*uu**3 + 3*uu**2, uu**3 - uu**2
-            d00, d10, d01, d11 = 6*uu**2 - 6*uu, 3*uu**2 - 4*uu + 1, -6*uu**2 + 6*uu, 3*uu**2 - 2*uu
-            i00, i10 = uu**4/2 - uu**3 + uu, uu**4/4 - 2*uu**3/3 + uu**2/2
-            i01, i11 = -uu**4/2 + uu**3, uu**4/4 - uu**3/3
-
-            def herm(x0, dx0, x1, dx1, b0, b1, b2, b3):
-                return (b0 * x0[:, None] + b1 * hk * dx0[:, None] + b2 * x1[:, None]
-                        + b3 * hk * dx1[:, None])
-            w = herm(a.w_b, a.wdot_b, b.w_b, b.wdot_b, h00, h10, h01, h11)
-            wd = herm(a.w_b, a.wdot_b, b.w_b, b.wdot_b, d00, d10, d01, d11) / hk
-            th = hk * herm(a.w_b, a.wdot_b, b.w_b, b.wdot_b, i00, i10, i01, i11)
-            c_nb = c0[:, None] @ rotvec_to_dcm_batch(th)
+            w, wd, th = hermite_nodes(a.w_b, a.wdot_b, b.w_b, b.wdot_b, hk, HERMITE)
+            c_nb = rotated(c0, th)
             v0 = np.einsum('kij,kj->ki', c0, a.v_b)
             v1 = np.einsum('kij,kj->ki', c1, b.v_b)
             a0 = np.einsum('kij,kj->ki', c0, a.a_b)
             a1 = np.einsum('kij,kj->ki', c1, b.a_b)
-            v_n = herm(v0, a0, v1, a1, h00, h10, h01, h11)
-            a_n = herm(v0, a0, v1, a1, d00, d10, d01, d11) / hk
+            v_n, a_n = hermite_nodes(v0, a0, v1, a1, hk, HERMITE[:2])
+            uu = u[None, :, None]
             p_w = (1.0 - uu) * a.p_w[:, None] + uu * b.p_w[:, None]
             flex = None
             if self.gear is not None:
@@ -304,8 +301,7 @@ class AircraftKinematics:
                 self.gear.feed(b, tau0[deck] + h[deck])
             if self.has_rot:
                 (t0, d0), (t1, d1) = self._flex_at(tau0[deck]), self._flex_at(tau0[deck] + h[deck])
-                flex = (herm(t0, d0, t1, d1, h00, h10, h01, h11),
-                        herm(t0, d0, t1, d1, d00, d10, d01, d11) / hk)
+                flex = tuple(hermite_nodes(t0, d0, t1, d1, hk, HERMITE[:2]))
             w_ib[deck], f[deck] = self._imu(*self._on_deck(c_nb, w, wd, v_n, a_n, p_w, tau[deck],
                                                            flex, vib_acc=not self.vib_motion))
         dth = h[:, None] * np.einsum('kjc,j->kc', w_ib, GL_WEIGHTS)

@@ -1,0 +1,42 @@
+"""The cubic Hermite of an IMU interval at its quadrature nodes (aircraft/interval_hermite.py)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from alignment_core.aircraft.interval_hermite import hermite_nodes
+from alignment_core.aircraft.kinematics import GL_NODES, HERMITE
+
+
+def _bits(a: np.ndarray) -> bytes:
+    return np.ascontiguousarray(a, dtype=float).tobytes()
+
+
+def test_the_compiled_hermite_is_numpys_bit_for_bit():
+    """hermite_nodes against the numpy form it replaced in the increments: the cubic
+    Hermite's value, rate and integral at the Gauss nodes, each node's sums in the same order."""
+    rng = np.random.default_rng(7)
+    x0, dx0, x1, dx1 = (rng.standard_normal((300, 3)) for _ in range(4))
+    h = rng.uniform(0.005, 0.02, 300)
+    hk, uu = h[:, None, None], GL_NODES[None, :, None]
+    basis = [[2*uu**3 - 3*uu**2 + 1, uu**3 - 2*uu**2 + uu, -2*uu**3 + 3*uu**2, uu**3 - uu**2],
+             [6*uu**2 - 6*uu, 3*uu**2 - 4*uu + 1, -6*uu**2 + 6*uu, 3*uu**2 - 2*uu],
+             [uu**4/2 - uu**3 + uu, uu**4/4 - 2*uu**3/3 + uu**2/2, -uu**4/2 + uu**3, uu**4/4 - uu**3/3]]
+
+    def herm(b0, b1, b2, b3):
+        return b0 * x0[:, None] + b1 * hk * dx0[:, None] + b2 * x1[:, None] + b3 * hk * dx1[:, None]
+    want = [herm(*basis[0]), herm(*basis[1]) / hk, hk * herm(*basis[2])]
+    got = hermite_nodes(x0, dx0, x1, dx1, h, HERMITE)
+    for i in range(3):
+        assert _bits(got[i]) == _bits(want[i])
+    assert _bits(hermite_nodes(x0, dx0, x1, dx1, h, HERMITE[:2])) == _bits(got[:2])
+    assert _bits(hermite_nodes.py_func(x0, dx0, x1, dx1, h, HERMITE)) == _bits(got)
+
+
+def test_the_hermite_refuses_ends_that_do_not_agree():
+    """numba checks no bounds: ends or interval lengths of other counts raise before any read."""
+    x = np.zeros((4, 3))
+    with pytest.raises(ValueError):
+        hermite_nodes(x, x, x[:3], x, np.ones(4), HERMITE)
+    with pytest.raises(ValueError):
+        hermite_nodes(x, x, x, x, np.ones(3), HERMITE)
