@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core.geometry.rotation_stacks import products, right_jacobians, rotated
+from alignment_core.geometry.rotation_stacks import _product, fma, products, right_jacobians, rotated
 from alignment_core.geometry.rotations import right_jacobian, rotvec_to_dcm_batch
 
 
@@ -38,3 +38,26 @@ def test_the_rotation_stacks_refuse_shapes_that_do_not_agree():
         rotated(c[:3], v)
     with pytest.raises(ValueError):
         products(c, c[:3])
+
+
+def test_fma_interpreted_is_the_compiled_fused_multiply_add():
+    """The interpreted fma (exact by fractions) gives the CPU's fused multiply-add, bit for bit:
+    a product whose rounding the sum exposes, signed zeros, infinities, NaN and overflow (each
+    case as fma(x, y, z) in a 3 x 3 product's chain, compiled and interpreted)."""
+    big, tiny = 1.7e308, 5e-324
+    a = 1.0 + 2.0**-30
+    cases = [(a, a, -1.0), (-0.0, 1.0, -0.0), (0.0, -1.0, 0.0), (-0.0, 1.0, 0.0), (1.0, 1.0, -1.0),
+             (-2.0, 3.0, 6.0), (big, 2.0, 0.0), (big, -2.0, 0.0), (big, 2.0, -big), (tiny, 0.5, 0.0),
+             (np.inf, 0.0, 1.0), (np.inf, 1.0, -np.inf), (np.nan, 1.0, 1.0), (1.0, 2.0, np.inf),
+             (3.0, 1.0 / 3.0, -1.0)]
+    assert fma(a, a, -1.0) != a * a - 1.0              # the case the single rounding shows
+    for x, y, z in cases:
+        ma, mb = np.zeros((3, 3)), np.zeros((3, 3))
+        ma[0] = -0.0, 1.0, x                            # out[0, 0] = fma(x, y, fma(1, z, -0 * 0)) = fma(x, y, z)
+        mb[:, 0] = 0.0, z, y
+        compiled, interpreted = np.empty((3, 3)), np.empty((3, 3))
+        _product(ma, mb, compiled)
+        with np.errstate(invalid='ignore', over='ignore'):   # numpy's scalars warn of inf * 0
+            _product.py_func(ma, mb, interpreted)
+        got, want = interpreted[0, 0], compiled[0, 0]
+        assert (np.isnan(got) and np.isnan(want)) or got.tobytes() == want.tobytes(), (x, y, z)

@@ -7,6 +7,7 @@ numpy's numbers without its temporaries. Should a numpy or BLAS upgrade change t
 the tests against numpy (tests/geometry/test_rotation_stacks.py) say so."""
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 
 import numpy as np
@@ -16,8 +17,17 @@ from alignment_core.compiled import kernel, on_numba
 
 def fma(a: float, b: float, c: float) -> float:
     """a b + c rounded once, as BLAS's 3 x 3 products accumulate (`rotated`); compiled, the
-    CPU's fused multiply-add."""
-    return float(Fraction(a) * Fraction(b) + Fraction(c))
+    CPU's fused multiply-add. A non-finite operand, or an exact zero (then a b is exact), gives
+    what the unfused a b + c gives; an exact sum beyond the float range, an infinity."""
+    if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+        return a * b + c
+    exact = Fraction(a) * Fraction(b) + Fraction(c)
+    if exact == 0:
+        return a * b + c
+    try:
+        return float(exact)
+    except OverflowError:
+        return math.inf if exact > 0 else -math.inf
 
 
 @on_numba
