@@ -14,6 +14,7 @@ import pytest
 from alignment_core import pipeline
 from alignment_core.config import scenario
 from alignment_core.recent_rows import RecentRows
+from alignment_core.ship import track
 
 
 def test_rows_read_back_by_index_until_forgotten():
@@ -58,6 +59,7 @@ def test_the_carriers_gear_flexure_and_track_hold_bounded_histories_in_a_long_st
     keeps a few hundred samples of the gear and the flexure (not the run's 60 000), and the
     ship's track a few thousand grid steps."""
     sc = scenario.load('deck', {'duration_s': 600.0})
+    track.forget_shared_starts()            # a fresh process's track: integrated here, nothing recalled
     src = pipeline.ship_source(sc)
     stage = pipeline.SlaveImuStage(sc)
     n = sc.n_samples
@@ -73,6 +75,7 @@ def test_the_carriers_gear_flexure_and_track_hold_bounded_histories_in_a_long_st
 _FILL_PROBE = """
 import numpy as np
 from alignment_core.recent_rows import RecentRows
+from alignment_core.ship import track
 
 def anon_kib():
     for line in open('/proc/self/status'):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from alignment_core.aircraft.gear_config import GearConfig
-from alignment_core.aircraft.gear_response import DeckGust, GearResponse, gust_series
+from alignment_core.aircraft.gear_response import DeckGust, GearResponse, gust_series, quintic_hermite
 from alignment_core.aircraft.landing_gear import N_DOF, GearModel, air_spring_excess_rows
 from alignment_core.units import G0
 
@@ -133,3 +133,12 @@ def test_imu_motion_is_the_per_node_numpy_form_bit_for_bit():
         got, want = resp.imu_motion(tau), _motion_reference(resp, tau)
         for g, w in zip(got, want):
             assert g.shape == w.shape and g.tobytes() == w.tobytes()
+
+
+def test_the_quintic_hermite_refuses_shapes_that_do_not_agree():
+    """numba checks no bounds: fractions or ends of other counts raise before any read."""
+    u, ends = np.zeros((4, 3)), [np.zeros((4, 3))] * 6
+    with pytest.raises(ValueError):
+        quintic_hermite(u, u, u[:3], u, u > 0, *ends, 0.01)
+    with pytest.raises(ValueError):
+        quintic_hermite(u, u, u, u, u > 0, *ends[:5], np.zeros((3, 3)), 0.01)

@@ -40,3 +40,19 @@ def test_the_hermite_refuses_ends_that_do_not_agree():
         hermite_nodes(x, x, x[:3], x, np.ones(4), HERMITE)
     with pytest.raises(ValueError):
         hermite_nodes(x, x, x, x, np.ones(3), HERMITE)
+
+
+def test_a_zero_length_interval_gives_numpys_infinities_and_nans():
+    """The rate divides by the interval's length: at h = +0 and -0 numpy's infinities of the
+    quotient's sign and NaN for 0 / 0, compiled as interpreted (a kernel's own division raises);
+    ends of any memory layout."""
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal((8, 3))
+    x0, dx0, x1, dx1 = x[::2], np.asfortranarray(x[1::2]), rng.standard_normal((4, 3)), np.zeros((4, 3))
+    h = np.array([0.01, 0.0, -0.0, 0.02])
+    got = hermite_nodes(x0, dx0, x1, dx1, h, HERMITE)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        want = hermite_nodes.py_func(x0, dx0, x1, dx1, h, HERMITE)
+    assert got.tobytes() == want.tobytes()
+    rate = got[1, 1:3]
+    assert np.all(np.isinf(rate) | np.isnan(rate)) and np.any(np.isinf(rate))

@@ -61,3 +61,10 @@ def test_fma_interpreted_is_the_compiled_fused_multiply_add():
             _product.py_func(ma, mb, interpreted)
         got, want = interpreted[0, 0], compiled[0, 0]
         assert (np.isnan(got) and np.isnan(want)) or got.tobytes() == want.tobytes(), (x, y, z)
+
+
+def test_a_zero_product_has_numpys_sign():
+    """A sum of negative zeros is +0 in BLAS's chain from a zero, as numpy gives it."""
+    a, b = np.full((2, 3, 3), -1.0), np.zeros((2, 3, 3))
+    assert products(a, b).tobytes() == (a @ b).tobytes() and not np.signbit(products(a, b)).any()
+    assert products.py_func(a, b).tobytes() == (a @ b).tobytes()

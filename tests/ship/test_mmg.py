@@ -205,9 +205,10 @@ def test_tracks_of_one_configuration_share_their_start_bit_for_bit(monkeypatch):
 
 
 def test_tracks_of_one_configuration_share_their_kinematics_bit_for_bit(monkeypatch):
-    """Kinematics a track of the configuration computed at the same times are recalled by
-    another, without integrating: the numbers of a track made alone, bit for bit, as copies (a
-    caller's change to them is not recalled). Nothing is stored while there is one track; the
+    """Kinematics asked for again at the same times, once the configuration has a second track,
+    are stored and then recalled by any of its tracks without integrating: the numbers of a track
+    made alone, bit for bit, as copies (a caller's change to them is not recalled). Nothing is
+    stored while there is one track, nor times asked for once (a stepped run's chunks); the
     oldest go when the store is full, and a set larger than it is never stored."""
     import alignment_core.ship.manoeuvring.course_keeping as ck
     steps = [0]
@@ -226,29 +227,34 @@ def test_tracks_of_one_configuration_share_their_kinematics_bit_for_bit(monkeypa
     shared = ck.SharedStart()
     first = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
     first.kinematics(times[0])
-    assert not shared.kinematics                               # one track: nothing kept
     second = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
-    got = [second.kinematics(t) for t in times[:2]]            # computed and stored
-    assert len(shared.kinematics) == 2
+    got = [second.kinematics(t) for t in times[:2]]
+    assert not shared.kinematics                               # one track, then asked for once: nothing kept
     got[0]['lat'][:] = 0.0                                     # the computing caller's arrays
-    steps[0] = 0
     third = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
-    again = [third.kinematics(t) for t in times[:2]]
+    for t in times[:2]:
+        third.kinematics(t)                                    # asked for again: stored
+    assert list(shared.kinematics) == [times[0].tobytes(), times[1].tobytes()]
+    steps[0] = 0
+    fourth = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
+    again = [fourth.kinematics(t) for t in times[:2]]
     assert steps[0] == 0                                       # recalled: nothing integrated
     for part, want_part in zip(again, want[:2], strict=True):
         assert part.keys() == want_part.keys()
         for key, value in want_part.items():
-            assert np.array_equal(part[key], value), key
+            assert part[key].tobytes() == value.tobytes(), key
     again[0]['lat'][:] = 0.0                                   # a recalled copy
-    assert np.array_equal(third.kinematics(times[0])['lat'], want[0]['lat'])
+    assert fourth.kinematics(times[0])['lat'].tobytes() == want[0]['lat'].tobytes()
     one = len(times[0].tobytes()) + sum(a.nbytes for a in want[0].values())
     monkeypatch.setattr(ck, 'SHARED_KINEMATICS_BYTES', 2 * one)
-    third.kinematics(times[2])                                 # the third set: the oldest goes
+    fourth.kinematics(times[2])
+    fourth.kinematics(times[2])                                # the third set: the oldest goes
     assert list(shared.kinematics) == [times[1].tobytes(), times[2].tobytes()]
     monkeypatch.setattr(ck, 'SHARED_KINEMATICS_BYTES', one - 1)
     fresh = ck.SharedStart()
     fresh.users = 2
-    fresh.store_kinematics(times[0].tobytes(), want[0])        # larger than the store: not kept
+    for _ in range(3):
+        fresh.store_kinematics(times[0].tobytes(), want[0])   # larger than the store: never kept
     assert not fresh.kinematics
 
 

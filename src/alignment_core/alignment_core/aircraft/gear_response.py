@@ -232,6 +232,11 @@ def quintic_hermite(u, u3, u4, u5, at_sample, d0, v0, a0, d1, v1, a1, h):
     start (0) and end (1); at_sample: the start's own values. u3, u4, u5: numpy's powers of u
     (its SIMD power rounds unlike the C library's); each product and sum in numpy's order."""
     m, n = u.shape
+    if not (u3.shape == u.shape and u4.shape == u.shape and u5.shape == u.shape and at_sample.shape == u.shape):
+        raise ValueError('quintic_hermite: fractions, their powers and at_sample of one shape (M, J)')
+    if not (d0.shape == (m, 3) and v0.shape == (m, 3) and a0.shape == (m, 3) and d1.shape == (m, 3)
+            and v1.shape == (m, 3) and a1.shape == (m, 3)):
+        raise ValueError('quintic_hermite: the ends (M, 3) of M intervals')
     out = np.empty((3, m, n, 3))
     hh = h * h
     for i in range(m):

@@ -4,6 +4,8 @@ nodes, with numpy's bits (each node's products and sums in the order numpy forms
 aircraft's ideal increments (aircraft/kinematics.py)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from alignment_core.compiled import kernel
@@ -26,9 +28,8 @@ def hermite_nodes(x0, dx0, x1, dx1, h, basis):
     basis (n, 4, J) (hermite_basis). One pass, each node's products and sums in numpy's order."""
     n, m = basis.shape[0], basis.shape[2]
     k_n = x0.shape[0]
-    for a in (x0, dx0, x1, dx1):
-        if a.shape[0] != k_n or a.shape[1] != 3:
-            raise ValueError('hermite_nodes: the ends (K, 3) of K intervals')
+    if not (x0.shape == (k_n, 3) and dx0.shape == (k_n, 3) and x1.shape == (k_n, 3) and dx1.shape == (k_n, 3)):
+        raise ValueError('hermite_nodes: the ends (K, 3) of K intervals')
     if h.shape[0] != k_n or basis.shape[1] != 4 or n > 3:
         raise ValueError('hermite_nodes: K interval lengths and a basis (n <= 3, 4, J)')
     out = np.empty((n, k_n, m, 3))
@@ -39,5 +40,16 @@ def hermite_nodes(x0, dx0, x1, dx1, h, basis):
                 b0, b1, b2, b3 = basis[r, 0, j], basis[r, 1, j] * hk, basis[r, 2, j], basis[r, 3, j] * hk
                 for c in range(3):
                     y = b0 * x0[k, c] + b1 * dx0[k, c] + b2 * x1[k, c] + b3 * dx1[k, c]
-                    out[r, k, j, c] = y if r == 0 else (y / hk if r == 1 else hk * y)
+                    out[r, k, j, c] = y if r == 0 else (divided(y, hk) if r == 1 else hk * y)
     return out
+
+
+@kernel
+def divided(y, d):
+    """y / d with numpy's result for d = 0 (an infinity of the quotient's sign, NaN for 0 / 0),
+    where a kernel's division raises (compiled.py: Python's error model)."""
+    if d != 0.0:
+        return y / d
+    if y != y or y == 0.0:
+        return math.nan
+    return math.copysign(math.inf, y) * math.copysign(1.0, d)

@@ -32,8 +32,8 @@ def finite(*arrays: np.ndarray) -> bool:
             return False
     if math.isfinite(t):
         return True
-    return all(math.isfinite(v) for a in arrays if type(a) is _NDARRAY and a.ndim == 1 and a.size <= 16
-               for v in a.tolist())
+    return all(math.isfinite(v) for a in arrays
+               if type(a) is _NDARRAY and a.dtype.char in 'fd' and a.ndim == 1 and a.size <= 16 for v in a.tolist())
 
 
 @kernel

@@ -1,8 +1,8 @@
 """Stacks of 3 x 3 rotations compiled with numpy's bits: exp([v x]) times a matrix, the right
 Jacobian J_r(v), and products of two stacks, for the aircraft's kinematics at many instants
 (aircraft/kinematics.py). numpy's 3 x 3 matrix product goes through BLAS's gemm, which rounds
-each entry as a chain of fused multiply-adds over the inner index; the kernels make the same
-chain (`fma`: the CPU's fused multiply-add compiled, exact by fractions interpreted), so they give
+each entry as a chain of fused multiply-adds over the inner index, from a zero; the kernels make
+the same chain (`fma`: the CPU's fused multiply-add compiled, exact by fractions interpreted), so they give
 numpy's numbers without its temporaries. Should a numpy or BLAS upgrade change that rounding,
 the tests against numpy (tests/geometry/test_rotation_stacks.py) say so."""
 from __future__ import annotations
@@ -49,10 +49,10 @@ def _fma_overload() -> None:
 @kernel
 def _product(a, b, out):
     """out <- a @ b (3, 3) as numpy's matmul rounds it (OpenBLAS's gemm: a chain of fused
-    multiply-adds over the inner index)."""
+    multiply-adds over the inner index from a zero, which makes a zero sum +0)."""
     for i in range(3):
         for j in range(3):
-            out[i, j] = fma(a[i, 2], b[2, j], fma(a[i, 1], b[1, j], a[i, 0] * b[0, j]))
+            out[i, j] = fma(a[i, 2], b[2, j], fma(a[i, 1], b[1, j], fma(a[i, 0], b[0, j], 0.0)))
 
 
 @kernel
@@ -62,7 +62,7 @@ def _skew_terms(x, y, z, s, c, sign, out):
     k = ((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0))
     for i in range(3):
         for j in range(3):
-            kk = fma(k[i][2], k[2][j], fma(k[i][1], k[1][j], k[i][0] * k[0][j]))
+            kk = fma(k[i][2], k[2][j], fma(k[i][1], k[1][j], fma(k[i][0], k[0][j], 0.0)))
             e = 1.0 if i == j else 0.0
             out[i, j] = (e + s * k[i][j] if sign > 0 else e - s * k[i][j]) + c * kk
 

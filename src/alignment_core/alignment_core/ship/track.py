@@ -17,7 +17,8 @@ if TYPE_CHECKING:
 
 SHARED_CONFIGURATIONS = 4
 """Configurations whose track starts are kept (the latest made): a sweep over many ship
-configurations keeps at most this many (some 1.6 MB each)."""
+configurations keeps at most this many (some 1.6 MB each, and up to 32 MB of kinematics:
+course_keeping.SHARED_KINEMATICS_BYTES)."""
 _SHARED: dict[ShipConfig, SharedStart] = {}
 
 

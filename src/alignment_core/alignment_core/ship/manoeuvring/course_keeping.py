@@ -54,6 +54,8 @@ SHARED_BLOCKS = 8
 SHARED_KINEMATICS_BYTES = 32 * 2**20
 """The kinematics the tracks of a configuration share, at most (their times and arrays): a 300 s
 run at 100 Hz asks for about 4 MB."""
+ASKED_KEPT = 4096
+"""Times asked for once that a configuration remembers (by hash) until they are asked again."""
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _GL_U = 0.5 * (_GL_X + 1.0)                   # nodes on [0, 1]
@@ -136,6 +138,7 @@ class SharedStart:
         self.blocks: list[tuple[tuple[float, ...], tuple[float, ...], np.ndarray, np.ndarray]] = []
         self.kinematics: OrderedDict[bytes, dict[str, np.ndarray]] = OrderedDict()   # by the times' bytes
         self._kinematics_bytes = 0
+        self._asked: set[int] = set()                 # hashes of the times asked for once, not stored
         self._lock = threading.Lock()
 
     def recall_kinematics(self, key: bytes) -> dict[str, np.ndarray] | None:
@@ -145,12 +148,20 @@ class SharedStart:
             return None if kin is None else {k: a.copy() for k, a in kin.items()}
 
     def store_kinematics(self, key: bytes, kin: dict[str, np.ndarray]) -> None:
-        """Keep a copy of a track's kinematics at the times `key`, if another track may ask for
-        them; the oldest go beyond SHARED_KINEMATICS_BYTES."""
+        """Keep a copy of a track's kinematics at the times `key` once they have been asked for
+        before (a Monte Carlo's runs ask again; a stepped run's chunks never do), if another track
+        may ask for them; the oldest go beyond SHARED_KINEMATICS_BYTES."""
         size = len(key) + sum(a.nbytes for a in kin.values())
         with self._lock:
             if self.users < 2 or key in self.kinematics or size > SHARED_KINEMATICS_BYTES:
                 return
+            seen = hash(key)
+            if seen not in self._asked:
+                if len(self._asked) >= ASKED_KEPT:
+                    self._asked.clear()
+                self._asked.add(seen)
+                return
+            self._asked.discard(seen)
             self.kinematics[key] = {k: a.copy() for k, a in kin.items()}
             self._kinematics_bytes += size
             while self._kinematics_bytes > SHARED_KINEMATICS_BYTES:
