@@ -141,3 +141,20 @@ def test_batch_equals_steps(stepped, batch, monkeypatch):
         _assert_imu(imu[k - 1], imus[k], k)
         assert _same(stage.errors.last_bias[k - 1], biases[k])
     assert len(imu) == len(stage.errors.last_bias) == len(ships) - 1 and stage.prev is not None
+
+
+@pytest.mark.parametrize('name', ['deck', 'deck_paper', 'carrier_flight'])
+def test_the_ship_in_chunks_of_any_size_is_the_whole_runs(name):
+    """The ship's truth evaluated one sample at a time, in chunks of 7 and of the ship node's 100
+    gives the whole run's, bit for bit (a single row's world position included: numpy's product of
+    one row rounds unlike a matrix's)."""
+    sc = scenario.load(name, {'duration_s': 2.0})
+    n = 201
+    taus = (np.arange(n) * sc.dt_ns) / 1e9
+    whole = pipeline.ship_source(sc).sample_batch(taus, sc.t0_ns, sc.dt_ns)
+    for chunk in (1, 7, 100):
+        src = pipeline.ship_source(sc)
+        parts = [src.sample_batch(taus[a:a + chunk], sc.t0_ns, sc.dt_ns, k0=a) for a in range(0, n, chunk)]
+        for field in ('p_w', 'q_nb', 'v_b', 'w_b', 'a_b', 'wdot_b'):
+            got = np.concatenate([getattr(p, field) for p in parts])
+            assert got.tobytes() == getattr(whole, field).tobytes(), (chunk, field)

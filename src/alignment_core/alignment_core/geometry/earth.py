@@ -147,7 +147,14 @@ class TangentPlane:
         self.c = c_ecef_to_enu(lat0, lon0)
 
     def from_geodetic(self, lat, lon, h) -> np.ndarray:
-        return (geodetic_to_ecef(lat, lon, h) - self.origin) @ self.c.T
+        """World points (..., 3) of geodetic coordinates; K points (K, 3) with the bits they have in
+        any batch of two or more (numpy's product of a single row is a matrix-vector product, which
+        rounds unlike the matrix product's fused multiply-adds): a ship evaluated in chunks of any
+        size, one sample included, gives the whole run's numbers."""
+        d = geodetic_to_ecef(lat, lon, h) - self.origin
+        if d.ndim == 2 and len(d) == 1:
+            return (np.concatenate([d, d]) @ self.c.T)[:1]
+        return d @ self.c.T
 
     def from_geodetic_point(self, lat: float, lon: float, h: float) -> np.ndarray:
         """from_geodetic of one point (3,), its bits, the geodetic terms in Python floats (an
