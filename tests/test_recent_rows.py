@@ -75,7 +75,6 @@ def test_the_carriers_gear_flexure_and_track_hold_bounded_histories_in_a_long_st
 _FILL_PROBE = """
 import numpy as np
 from alignment_core.recent_rows import RecentRows
-from alignment_core.ship import track
 
 def anon_kib():
     for line in open('/proc/self/status'):

@@ -144,6 +144,7 @@ def test_finite_refuses_any_non_finite_element_of_any_array(dtype):
     huge = np.array([big, big, 0.0], dtype)            # finite, though its sum overflows
     assert health.finite(huge) and health.finite(np.ones(3, dtype), huge, -huge)
     assert not health.finite(huge, np.array([0.0, np.nan, 0.0], dtype))
+    assert health.finite(huge, np.array([1 + 1j])) and not health.finite(huge, np.array([complex(np.inf, 0.0)]))
     rng = np.random.default_rng(1)
     for _ in range(50):
         a = rng.standard_normal((4, 5)).astype(dtype)

@@ -63,8 +63,17 @@ def test_fma_interpreted_is_the_compiled_fused_multiply_add():
         assert (np.isnan(got) and np.isnan(want)) or got.tobytes() == want.tobytes(), (x, y, z)
 
 
-def test_a_zero_product_has_numpys_sign():
-    """A sum of negative zeros is +0 in BLAS's chain from a zero, as numpy gives it."""
-    a, b = np.full((2, 3, 3), -1.0), np.zeros((2, 3, 3))
-    assert products(a, b).tobytes() == (a @ b).tobytes() and not np.signbit(products(a, b)).any()
-    assert products.py_func(a, b).tobytes() == (a @ b).tobytes()
+def test_a_zero_or_underflowed_product_has_numpys_sign():
+    """An entry whose terms are all zero or underflow to negative values is +0, as numpy's BLAS
+    gives it (the zeroed output added after the chain), compiled and interpreted; products of
+    tiny and huge matrices are numpy's bit for bit."""
+    tiny = np.full((2, 3, 3), 1e-170)
+    for a, b in ((np.full((2, 3, 3), -1.0), np.zeros((2, 3, 3))), (tiny, -tiny),
+                 (0.5 * np.eye(3)[None].repeat(2, axis=0), np.full((2, 3, 3), -5e-324))):
+        assert products(a, b).tobytes() == (a @ b).tobytes() and not np.signbit(products(a, b)).any()
+        assert products.py_func(a, b).tobytes() == (a @ b).tobytes()
+    rng = np.random.default_rng(9)
+    for scale in (1e-300, 1e-162, 1e300):
+        a, b = rng.standard_normal((500, 3, 3)) * scale, rng.standard_normal((500, 3, 3)) * scale
+        with np.errstate(over='ignore', under='ignore'):
+            assert products(a, b).tobytes() == (a @ b).tobytes()

@@ -228,13 +228,13 @@ def test_tracks_of_one_configuration_share_their_kinematics_bit_for_bit(monkeypa
     first = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
     first.kinematics(times[0])
     second = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
-    got = [second.kinematics(t) for t in times[:2]]
-    assert not shared.kinematics                               # one track, then asked for once: nothing kept
-    got[0]['lat'][:] = 0.0                                     # the computing caller's arrays
-    third = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
     for t in times[:2]:
-        third.kinematics(t)                                    # asked for again: stored
+        second.kinematics(t)
+    assert not shared.kinematics                               # one track, then asked for once: nothing kept
+    third = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
+    stored = [third.kinematics(t) for t in times[:2]]          # asked for again: stored
     assert list(shared.kinematics) == [times[0].tobytes(), times[1].tobytes()]
+    stored[0]['lat'][:] = 0.0                                  # the storing caller's arrays: a copy was kept
     steps[0] = 0
     fourth = ManoeuvringTrack(*parts, warmup=60.0, shared=shared)
     again = [fourth.kinematics(t) for t in times[:2]]
@@ -256,6 +256,15 @@ def test_tracks_of_one_configuration_share_their_kinematics_bit_for_bit(monkeypa
     for _ in range(3):
         fresh.store_kinematics(times[0].tobytes(), want[0])   # larger than the store: never kept
     assert not fresh.kinematics
+    monkeypatch.setattr(ck, 'SHARED_KINEMATICS_BYTES', 4 * one)
+    monkeypatch.setattr(ck, 'ASKED_KEPT', 1)                   # remembers one first ask at a time
+    a, b = times[0].tobytes(), times[1].tobytes()
+    fresh.store_kinematics(a, want[0])
+    fresh.store_kinematics(b, want[1])                         # forgets a's ask
+    fresh.store_kinematics(a, want[0])
+    assert not fresh.kinematics                                # a's ask again counts as its first
+    fresh.store_kinematics(a, want[0])
+    assert list(fresh.kinematics) == [a]
 
 
 def test_make_track_shares_a_start_per_configuration_and_keeps_a_few():

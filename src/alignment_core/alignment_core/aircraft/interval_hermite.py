@@ -46,10 +46,9 @@ def hermite_nodes(x0, dx0, x1, dx1, h, basis):
 
 @kernel
 def divided(y, d):
-    """y / d with numpy's result for d = 0 (an infinity of the quotient's sign, NaN for 0 / 0),
-    where a kernel's division raises (compiled.py: Python's error model)."""
+    """y / d with numpy's bits for d = 0 (y times an infinity of d's sign: the quotient's
+    infinity, the CPU's NaN for 0 / 0, a NaN y passed on), where a kernel's own division raises
+    (compiled.py: Python's error model)."""
     if d != 0.0:
         return y / d
-    if y != y or y == 0.0:
-        return math.nan
-    return math.copysign(math.inf, y) * math.copysign(1.0, d)
+    return y * math.copysign(math.inf, d)

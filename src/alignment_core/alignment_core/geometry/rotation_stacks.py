@@ -1,10 +1,11 @@
 """Stacks of 3 x 3 rotations compiled with numpy's bits: exp([v x]) times a matrix, the right
 Jacobian J_r(v), and products of two stacks, for the aircraft's kinematics at many instants
 (aircraft/kinematics.py). numpy's 3 x 3 matrix product goes through BLAS's gemm, which rounds
-each entry as a chain of fused multiply-adds over the inner index, from a zero; the kernels make
-the same chain (`fma`: the CPU's fused multiply-add compiled, exact by fractions interpreted), so they give
-numpy's numbers without its temporaries. Should a numpy or BLAS upgrade change that rounding,
-the tests against numpy (tests/geometry/test_rotation_stacks.py) say so."""
+each entry as a chain of fused multiply-adds over the inner index and then adds the zeroed
+output; the kernels make the same chain (`fma`: the CPU's fused multiply-add compiled, exact by
+fractions interpreted), so they give numpy's numbers without its temporaries. Should a numpy or
+BLAS upgrade change that rounding, the tests against numpy (tests/geometry/test_rotation_stacks.py)
+say so."""
 from __future__ import annotations
 
 import math
@@ -47,12 +48,19 @@ def _fma_overload() -> None:
 
 
 @kernel
+def _entry(x0, y0, x1, y1, x2, y2):
+    """x . y of three pairs as OpenBLAS's gemm rounds an entry of a matrix product: a chain of
+    fused multiply-adds over the inner index, then the zeroed output added (+0.0: a zero or an
+    underflowed sum comes out +0, as numpy gives it)."""
+    return fma(x2, y2, fma(x1, y1, x0 * y0)) + 0.0
+
+
+@kernel
 def _product(a, b, out):
-    """out <- a @ b (3, 3) as numpy's matmul rounds it (OpenBLAS's gemm: a chain of fused
-    multiply-adds over the inner index from a zero, which makes a zero sum +0)."""
+    """out <- a @ b (3, 3) as numpy's matmul rounds it (`_entry`)."""
     for i in range(3):
         for j in range(3):
-            out[i, j] = fma(a[i, 2], b[2, j], fma(a[i, 1], b[1, j], fma(a[i, 0], b[0, j], 0.0)))
+            out[i, j] = _entry(a[i, 0], b[0, j], a[i, 1], b[1, j], a[i, 2], b[2, j])
 
 
 @kernel
@@ -62,7 +70,7 @@ def _skew_terms(x, y, z, s, c, sign, out):
     k = ((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0))
     for i in range(3):
         for j in range(3):
-            kk = fma(k[i][2], k[2][j], fma(k[i][1], k[1][j], fma(k[i][0], k[0][j], 0.0)))
+            kk = _entry(k[i][0], k[0][j], k[i][1], k[1][j], k[i][2], k[2][j])
             e = 1.0 if i == j else 0.0
             out[i, j] = (e + s * k[i][j] if sign > 0 else e - s * k[i][j]) + c * kk
 
