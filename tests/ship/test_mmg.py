@@ -163,6 +163,26 @@ def test_autopilot_holds_and_changes_course():
     assert math.degrees(k['psi'][1]) == pytest.approx(120.0, abs=0.5)
 
 
+def _counted_steps(monkeypatch) -> list[int]:
+    """A one-element list that counts the RK4 steps course_keeping takes from now on."""
+    import alignment_core.ship.manoeuvring.course_keeping as ck
+    steps = [0]
+
+    def counted(*args):
+        steps[0] += 1
+        return rk4_step(*args)
+    monkeypatch.setattr(ck, 'rk4_step', counted)
+    return steps
+
+
+def _track_parts(change_at_s: float) -> tuple:
+    """ManoeuvringTrack's arguments for the carrier turning from 30 to 60 deg at change_at_s."""
+    rmax = math.radians(35.0)
+    return (MmgModel(CARRIER), Autopilot(2.0, 0.01, 60.0, rmax), SteeringGear(rmax, math.radians(2.5), 2.0),
+            CourseSchedule(math.radians(30.0), 20 * 0.514444, change_at_s, math.radians(60.0)),
+            math.radians(40.0), math.radians(116.0), 0.5)
+
+
 def test_tracks_of_one_configuration_share_their_start_bit_for_bit(monkeypatch):
     """Tracks made with one SharedStart, read in turns: nothing is stored while there is one
     track (a process with one track keeps no copy), then each block by whichever track reaches
@@ -170,16 +190,8 @@ def test_tracks_of_one_configuration_share_their_start_bit_for_bit(monkeypatch):
     one's kinematics, read in turns, are those of a track made alone, bit for bit."""
     import alignment_core.ship.manoeuvring.course_keeping as ck
     monkeypatch.setattr(ck, 'SHARED_BLOCKS', 2)
-    steps = [0]
-
-    def counted(*args):
-        steps[0] += 1
-        return rk4_step(*args)
-    monkeypatch.setattr(ck, 'rk4_step', counted)
-    rmax = math.radians(35.0)
-    parts = (MmgModel(CARRIER), Autopilot(2.0, 0.01, 60.0, rmax), SteeringGear(rmax, math.radians(2.5), 2.0),
-             CourseSchedule(math.radians(30.0), 20 * 0.514444, 300.0, math.radians(60.0)),
-             math.radians(40.0), math.radians(116.0), 0.5)
+    steps = _counted_steps(monkeypatch)
+    parts = _track_parts(change_at_s=300.0)
     early, late = np.linspace(0.0, 400.0, 801), np.linspace(400.5, 1100.0, 1400)   # three blocks of 512 s
     alone = ManoeuvringTrack(*parts, warmup=60.0)
     want = [alone.kinematics(early), alone.kinematics(late)]
@@ -201,7 +213,7 @@ def test_tracks_of_one_configuration_share_their_start_bit_for_bit(monkeypatch):
     for got, want_of in ((got_first, want), (got_second, want), (got_third, want_third)):
         for part, want_part in zip(got, want_of, strict=True):
             for key, value in want_part.items():
-                assert np.array_equal(part[key], value), key
+                assert part[key].tobytes() == value.tobytes(), key
 
 
 def test_tracks_of_one_configuration_share_their_kinematics_bit_for_bit(monkeypatch):
@@ -211,16 +223,8 @@ def test_tracks_of_one_configuration_share_their_kinematics_bit_for_bit(monkeypa
     stored while there is one track, nor times asked for once (a stepped run's chunks); the
     oldest go when the store is full, and a set larger than it is never stored."""
     import alignment_core.ship.manoeuvring.course_keeping as ck
-    steps = [0]
-
-    def counted(*args):
-        steps[0] += 1
-        return rk4_step(*args)
-    monkeypatch.setattr(ck, 'rk4_step', counted)
-    rmax = math.radians(35.0)
-    parts = (MmgModel(CARRIER), Autopilot(2.0, 0.01, 60.0, rmax), SteeringGear(rmax, math.radians(2.5), 2.0),
-             CourseSchedule(math.radians(30.0), 20 * 0.514444, 100.0, math.radians(60.0)),
-             math.radians(40.0), math.radians(116.0), 0.5)
+    steps = _counted_steps(monkeypatch)
+    parts = _track_parts(change_at_s=100.0)
     times = [np.linspace(0.0, 300.0, 3001), np.linspace(0.05, 300.05, 3001), np.linspace(0.1, 300.1, 3001)]
     alone = ManoeuvringTrack(*parts, warmup=60.0)
     want = [alone.kinematics(t) for t in times]
