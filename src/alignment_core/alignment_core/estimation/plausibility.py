@@ -2,7 +2,12 @@
 input plausibility). A non-finite value, a master quaternion off unit norm, a value beyond the
 sensor's or the vehicle's physical range, or a stamp far ahead of every other stream (the outlier,
 not the samples after it) is rejected and counted by reason; a master quaternion within the
-tolerance is normalised. The filter node adds 'frame_id' (it never passes such a message on)."""
+tolerance is normalised. The filter node adds 'frame_id' (it never passes such a message on).
+
+A compiled test first accepts the usual sample in one call (`imu_plausible`, `master_plausible`,
+`norm_within`): it says yes only where the rules surely do, with a margin on every norm, and
+leaves everything else (a rejection, a sample near a limit, a quaternion to normalise, arrays
+that are not 1-D float64) to the rules, so the decisions are the rules' own."""
 from __future__ import annotations
 
 import dataclasses
@@ -10,6 +15,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
+from alignment_core.compiled import FLOAT64, kernel
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.health import finite
 from alignment_core.estimation.outputs import Counters
@@ -19,6 +27,9 @@ from alignment_core.units import DEG, G0
 # reasons a sample is rejected (Counters.rejected_<reason>; the node adds 'frame_id')
 REASONS = ('nonfinite', 'out_of_order', 'quaternion', 'range', 'future_stamp', 'ldv_mode')
 UNIT_ROUNDING = 1e-12      # |norm - 1| below this is rounding: the quaternion is used as given
+NORM_MARGIN = 1e-9         # the compiled accept's relative margin on a norm against its limit
+QUATERNION_MARGIN = 1e-14  # ... and on a quaternion's norm against 1 (hypot and a plain sqrt differ by ulps)
+_NDARRAY = np.ndarray
 
 
 @dataclass(frozen=True)
@@ -57,8 +68,21 @@ def _max_abs(a: Any) -> float:
     return max(abs(x), abs(y), abs(z))
 
 
+def _vector(a: Any) -> bool:
+    """a is a 1-D float64 array: what the compiled accepts take (anything else goes by the rules)."""
+    return type(a) is _NDARRAY and (a.dtype is FLOAT64 or a.dtype == FLOAT64) and a.ndim == 1
+
+
 def imu_reason(s: ImuSample, lim: Limits) -> str:
     """'' if plausible, else why not: a rate or specific force beyond the IMU's full scale."""
+    g, a = s.gyro, s.accel
+    if _vector(g) and _vector(a) and imu_plausible(g, a, lim.gyro_max, lim.accel_max):
+        return ''
+    return imu_rules(s, lim)
+
+
+def imu_rules(s: ImuSample, lim: Limits) -> str:
+    """imu_reason's rules, which decide whatever the compiled accept does not."""
     if not finite(s.gyro, s.accel):
         return 'nonfinite'
     if _max_abs(s.gyro) > lim.gyro_max or _max_abs(s.accel) > lim.accel_max:
@@ -69,6 +93,14 @@ def imu_reason(s: ImuSample, lim: Limits) -> str:
 def master_check(s: MasterSample, lim: Limits) -> tuple[MasterSample | None, str]:
     """(the sample, '') if plausible, its quaternion normalised when it is off unit norm by more
     than rounding (and by no more than the tolerance), else (None, why not)."""
+    if _vector(s.p_w) and _vector(s.q_nb) and _vector(s.v_b) and _vector(s.w_b) and master_plausible(
+            s.p_w, s.q_nb, s.v_b, s.w_b, lim.quaternion_tol, lim.master_speed, lim.master_rate, lim.position):
+        return s, ''
+    return master_rules(s, lim)
+
+
+def master_rules(s: MasterSample, lim: Limits) -> tuple[MasterSample | None, str]:
+    """master_check's rules, which decide whatever the compiled accept does not."""
     if not finite(s.p_w, s.q_nb, s.v_b, s.w_b):
         return None, 'nonfinite'
     n = math.hypot(*s.q_nb.tolist())
@@ -84,6 +116,13 @@ def master_check(s: MasterSample, lim: Limits) -> tuple[MasterSample | None, str
 def ldv_reason(s: LdvSample, lim: Limits) -> str:
     """A valid LDV sample must be finite and slower than the deck run allows, and of the LDV's
     kind (filter.ldv_mode): a beam sample carries a unit line of sight, a vector one none."""
+    if s.valid and s.beam is None and not lim.ldv_beam and _vector(s.v_s) and norm_within(s.v_s, 3, lim.ldv_speed):
+        return ''
+    return ldv_rules(s, lim)
+
+
+def ldv_rules(s: LdvSample, lim: Limits) -> str:
+    """ldv_reason's rules, which decide whatever the compiled accept does not."""
     if not s.valid:
         return ''
     if not finite(s.v_s) or (s.beam is not None and not finite(s.beam)):
@@ -100,6 +139,55 @@ def doppler_reason(s: DopplerSample, lim: Limits) -> str:
     if not (finite(s.v_b) and math.isfinite(s.sigma)):
         return 'nonfinite'
     return 'range' if _norm(s.v_b) > lim.doppler_speed or s.sigma < 0.0 else ''
+
+
+@kernel
+def within(a, limit):
+    """True if a (3,) is finite with every |a_i| <= limit (`_max_abs(a) > limit` is False)."""
+    if a.shape[0] != 3:
+        return False
+    for i in range(3):
+        if not abs(a[i]) <= limit or not (-math.inf < a[i] < math.inf):
+            return False
+    return True
+
+
+@kernel
+def norm_within(a, size, limit):
+    """True if a (size,) is finite and surely |a| <= limit: |a| from its plain sum of squares,
+    within NORM_MARGIN of the limit (hypot's |a| and this one differ by a few ulps; nearer the
+    limit, or overflowing, the rules decide)."""
+    if a.shape[0] != size:
+        return False
+    ss = 0.0
+    for i in range(size):
+        if not (-math.inf < a[i] < math.inf):
+            return False
+        ss += a[i] * a[i]
+    bound = limit * (1.0 - NORM_MARGIN)
+    return ss <= bound * bound
+
+
+@kernel
+def imu_plausible(gyro, accel, gyro_max, accel_max):
+    """True if imu_reason's rules surely accept (gyro, accel): finite and within full scale."""
+    return within(gyro, gyro_max) and within(accel, accel_max)
+
+
+@kernel
+def master_plausible(p_w, q_nb, v_b, w_b, quaternion_tol, speed, rate, position):
+    """True if master_check's rules surely pass the sample on as given: finite, within range, and
+    its quaternion's norm within rounding of 1 (and the tolerance), with the margins above."""
+    if not (norm_within(v_b, 3, speed) and norm_within(w_b, 3, rate) and norm_within(p_w, 3, position)):
+        return False
+    if q_nb.shape[0] != 4:
+        return False
+    ss = 0.0
+    for i in range(4):
+        if not (-math.inf < q_nb[i] < math.inf):
+            return False
+        ss += q_nb[i] * q_nb[i]
+    return abs(math.sqrt(ss) - 1.0) + QUATERNION_MARGIN <= min(quaternion_tol, UNIT_ROUNDING)
 
 
 class InputGate:

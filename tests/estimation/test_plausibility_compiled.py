@@ -1,0 +1,131 @@
+"""The compiled accepts of estimation/plausibility.py decide nothing of their own: on samples at,
+near and beyond every limit, non-finite, huge, tiny, of other types and lengths, the checks
+give the rules' answers (the same object, or the same normalised bits), and the accepts say yes
+only where the rules accept as given. Compiled and interpreted alike."""
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from alignment_core.estimation import plausibility as pl
+from alignment_core.estimation.config import FilterConfig
+from alignment_core.samples import ImuSample, LdvSample, MasterSample
+from alignment_core.units import DEG, G0
+
+LIM = pl.Limits.of(FilterConfig())
+UP = math.nextafter
+
+
+def _edges(limit: float) -> list[float]:
+    """Values at, just inside and just beyond a limit, far inside and beyond, and non-finite."""
+    return [0.0, -0.0, 1e-300, 0.5 * limit, UP(limit, 0.0), limit, UP(limit, math.inf), -limit, 2.0 * limit,
+            1e308, math.inf, -math.inf, math.nan]
+
+
+def _imu_samples() -> list[ImuSample]:
+    out = []
+    for g, a in itertools.product(_edges(LIM.gyro_max), _edges(LIM.accel_max)):
+        out.append(ImuSample(1, np.array([0.01, g, -0.02]), np.array([a, 0.1, -9.8])))
+    out += [ImuSample(1, np.array([0.01, 0.0, 0.0], dtype=np.float32), np.array([0.0, 0.0, -9.8])),
+            ImuSample(1, np.array([0.01, 0.0, 0.0, 0.0])[::1][:3], np.array([0.0, 0.0, -9.8])),
+            ImuSample(1, np.arange(6.0)[::2], np.array([0.0, 0.0, -9.8]))]      # a strided view
+    return out
+
+
+def _norm_edges(limit: float) -> list[np.ndarray]:
+    """3-vectors whose norm is at, within an ulp or a margin of, and beyond a limit."""
+    u = np.array([0.6, 0.0, 0.8])
+    out = [u * limit * f for f in (0.0, 0.5, 1.0 - 2e-9, 1.0 - 1e-9, 1.0 - 1e-12, 1.0, 1.0 + 1e-15, 1.0 + 1e-9, 2.0)]
+    out += [np.array([limit, 0.0, 0.0]), np.array([UP(limit, 0.0), 0.0, 0.0]), np.array([1e200, 1e200, 0.0]),
+            np.array([1e-200, 0.0, 0.0]), np.array([math.nan, 0.0, 0.0]), np.array([0.0, math.inf, 0.0])]
+    return out
+
+
+def _quaternions() -> list[np.ndarray]:
+    q = np.array([0.1, -0.2, 0.3, 0.0])
+    q[3] = math.sqrt(1.0 - q[:3] @ q[:3])
+    out = [q * s for s in (1.0, 1.0 + 2e-16, 1.0 + 5e-13, 1.0 + 9.99e-13, 1.0 + 1e-12, 1.0 + 1.01e-12, 1.0 - 1e-12,
+                           1.0 + 5e-4, 1.0 + LIM.quaternion_tol, 1.0 + 2e-3, 2.0, 0.0)]
+    return out + [np.array([0.0, 0.0, 0.0, 1.0]), np.array([math.nan, 0.0, 0.0, 1.0]), np.array([0.0, 0.0, 1.0])]
+
+
+def _master_samples() -> list[MasterSample]:
+    p, q, v, w = np.array([100.0, 50.0, 0.0]), _quaternions()[0], np.array([5.0, 0.0, 0.0]), np.array([0.01, 0, 0])
+    out = [MasterSample(1, p, qq, v, w) for qq in _quaternions()]
+    out += [MasterSample(1, p, q, vv, w) for vv in _norm_edges(LIM.master_speed)]
+    out += [MasterSample(1, p, q, v, ww) for ww in _norm_edges(LIM.master_rate)]
+    out += [MasterSample(1, pp, q, v, w) for pp in _norm_edges(LIM.position)]
+    out.append(MasterSample(1, p, q.astype(np.float32), v, w))
+    return out
+
+
+def _ldv_samples() -> list[LdvSample]:
+    out = [LdvSample(1, vv, 0.01, True) for vv in _norm_edges(LIM.ldv_speed)]
+    out += [LdvSample(1, np.array([0.1, 0.0, 0.0]), 0.01, True, beam=np.array([1.0, 0.0, 0.0])),
+            LdvSample(1, np.full(3, math.nan), math.nan, False), LdvSample(1, np.array([1, 2, 3]), 0.01, True)]
+    return out
+
+
+def test_imu_checks_give_the_rules_answers():
+    for s in _imu_samples():
+        assert pl.imu_reason(s, LIM) == pl.imu_rules(s, LIM), s
+
+
+def test_master_checks_give_the_rules_answers_to_the_bit():
+    for s in _master_samples():
+        got, why = pl.master_check(s, LIM)
+        want, want_why = pl.master_rules(s, LIM)
+        assert why == want_why, s
+        if want is s:
+            assert got is s
+        elif want is None:
+            assert got is None
+        else:
+            assert got is not None and got.q_nb.tobytes() == want.q_nb.tobytes()
+
+
+def test_ldv_checks_give_the_rules_answers():
+    for lim in (LIM, pl.Limits.of(FilterConfig(ldv_mode='beam'))):
+        for s in _ldv_samples():
+            assert pl.ldv_reason(s, lim) == pl.ldv_rules(s, lim), s
+
+
+@pytest.mark.parametrize('compiled', [True, False])
+def test_the_accepts_say_yes_only_where_the_rules_pass_the_sample_as_given(compiled):
+    imu = pl.imu_plausible if compiled else pl.imu_plausible.py_func
+    master = pl.master_plausible if compiled else pl.master_plausible.py_func
+    norm = pl.norm_within if compiled else pl.norm_within.py_func
+    with np.errstate(over='ignore'):          # interpreted, numpy's scalars warn where a square overflows
+        yes = _accepted(imu, master, norm)
+    assert yes > 20                       # the usual samples are accepted without the rules
+
+
+def _accepted(imu, master, norm) -> int:
+    yes = 0
+    for s in _imu_samples():
+        if pl._vector(s.gyro) and pl._vector(s.accel) and imu(s.gyro, s.accel, LIM.gyro_max, LIM.accel_max):
+            yes += 1
+            assert pl.imu_rules(s, LIM) == ''
+    for m in _master_samples():
+        arrays = (m.p_w, m.q_nb, m.v_b, m.w_b)
+        if all(pl._vector(a) for a in arrays) and master(*arrays, LIM.quaternion_tol, LIM.master_speed,
+                                                          LIM.master_rate, LIM.position):
+            yes += 1
+            assert pl.master_rules(m, LIM) == (m, '')
+    for v in _norm_edges(LIM.ldv_speed):
+        if norm(v, 3, LIM.ldv_speed):
+            yes += 1
+            assert math.hypot(*v.tolist()) <= LIM.ldv_speed
+    return yes
+
+
+def test_the_accepts_leave_a_limit_to_the_rules():
+    """At a norm's limit, or a quaternion's norm one ulp-scale step from rounding, the accept
+    says no (the margin); the rules then accept or reject."""
+    assert not pl.norm_within(np.array([LIM.ldv_speed, 0.0, 0.0]), 3, LIM.ldv_speed)
+    assert pl.norm_within(np.array([LIM.ldv_speed * (1.0 - 2e-9), 0.0, 0.0]), 3, LIM.ldv_speed)
+    assert pl.within(np.array([400.0 * DEG, 0.0, 0.0]), LIM.gyro_max) == (400.0 * DEG <= LIM.gyro_max)
+    assert not pl.within(np.array([16.0 * G0, 0.0]), LIM.accel_max)      # not a 3-vector
