@@ -171,3 +171,23 @@ def test_the_stack_encodes_to_the_bits_of_each_sample_encoded_alone():
         assert cov_b.tobytes() == ldv_wire.encode(batch[0])[1].tobytes()
     empty_lin, empty_cov = ldv_wire.encode_all([])
     assert empty_lin.shape == (0, 3) and empty_cov.shape == (0, 3, 3)
+
+
+@pytest.mark.parametrize('var', [5e-324, 1e-300, 1e-20, 1e-4, 1.0, 1e20, 1e300])
+def test_a_vector_ldvs_covariance_is_no_beam_at_any_scale(var):
+    """sigma^2 I is read as a vector sample of sigma without solving for its eigenvalues: numpy's
+    eigh of it says the same (its middle eigenvalue is far above the beam's fraction of the
+    trace, or it does not converge, which reads as no beam too), alone and in a stack."""
+    c = np.eye(3) * var
+    try:
+        w = np.linalg.eigh(c)[0]
+        assert not w[1] <= ldv_wire.BEAM_RANK_TOLERANCE * (3.0 * var)
+    except np.linalg.LinAlgError:
+        pass
+    u = np.array([0.6, -0.48, 0.64])
+    beam = ldv_wire.encode(LdvSample(t_ns=0, v_s=u, sigma=0.02, valid=True, beam=u))[1]
+    alone = ldv_wire.decode(0, u, c)
+    stack = ldv_wire.decode_all([0, 1], np.tile(u, (2, 1)), np.array([c, beam]))
+    for s in (alone, stack[0]):
+        assert s.valid and s.beam is None and s.sigma == math.sqrt(var)
+    assert stack[1].beam is not None

@@ -47,7 +47,7 @@ def decode(t_ns: int, linear: np.ndarray, cov: np.ndarray) -> LdvSample:
     if not c0 >= 0.0:                                   # NaN: not valid
         return LdvSample(t_ns=t_ns, v_s=v, sigma=math.nan, valid=False)
     trace = cells[0] + cells[4] + cells[8]
-    if all(map(math.isfinite, cells)) and trace > 0.0:
+    if all(map(math.isfinite, cells)) and trace > 0.0 and not _isotropic(cells):
         w1, beam = _eigh_one(0.5 * (cov + cov.T))
         if w1 <= BEAM_RANK_TOLERANCE * trace:
             return LdvSample(t_ns=t_ns, v_s=v, sigma=math.sqrt(trace), valid=True, beam=beam)
@@ -67,13 +67,13 @@ def _eigh_one(a: np.ndarray) -> tuple[float, np.ndarray]:
 
 def decode_all(t_ns: list[int], linear: np.ndarray, cov: np.ndarray) -> list[LdvSample]:
     """The LdvSamples of velocities (N, 3) and their linear covariances (N, 3, 3), the
-    covariances that could be a beam's (valid, finite, a positive trace) decomposed as one stack
-    (eigh solves each matrix on its own: the same bits as one by one; a stack with one that does
-    not converge, each on its own)."""
+    covariances that could be a beam's (valid, finite, a positive trace, not sigma^2 I) decomposed
+    as one stack (eigh solves each matrix on its own: the same bits as one by one; a stack with
+    one that does not converge, each on its own)."""
     c0 = cov[:, 0, 0]
     valid = c0 >= 0.0                                   # NaN: not valid
     trace = cov[:, 0, 0] + cov[:, 1, 1] + cov[:, 2, 2]
-    candidate = valid & np.isfinite(cov).all(axis=(1, 2)) & (trace > 0.0)
+    candidate = valid & np.isfinite(cov).all(axis=(1, 2)) & (trace > 0.0) & ~_isotropic_stack(cov)
     w1, beam = np.full(len(cov), math.nan), np.zeros((len(cov), 3))     # NaN: not a beam
     if candidate.all():                                 # the usual case: no masks
         w1, beam = _eigh_stack(0.5 * (cov + cov.transpose(0, 2, 1)))
@@ -92,6 +92,22 @@ def decode_all(t_ns: list[int], linear: np.ndarray, cov: np.ndarray) -> list[Ldv
         else:
             out.append(LdvSample(t_ns=t, v_s=v, sigma=math.sqrt(var), valid=True))
     return out
+
+
+def _isotropic(cells: list[float]) -> bool:
+    """The 9 cells are sigma^2 I (a vector LDV's): its middle eigenvalue is sigma^2, within
+    rounding of the cells (LAPACK's eigenvalues are backward stable), far above a beam's
+    BEAM_RANK_TOLERANCE of the trace, and one that does not converge is no beam either: so it
+    is not a beam without solving for the eigenvalues."""
+    c = cells[0]
+    return cells[4] == c and cells[8] == c and not any(cells[k] for k in (1, 2, 3, 5, 6, 7))
+
+
+def _isotropic_stack(cov: np.ndarray) -> np.ndarray:
+    """(N,) `_isotropic` of each of the covariances (N, 3, 3)."""
+    c = cov[:, 0, 0]
+    off = cov.reshape(-1, 9)[:, [1, 2, 3, 5, 6, 7]]
+    return (cov[:, 1, 1] == c) & (cov[:, 2, 2] == c) & ~off.any(axis=1)
 
 
 def _eigh_stack(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
