@@ -62,8 +62,17 @@ def _master_samples() -> list[MasterSample]:
     return out
 
 
+def _beams() -> list[np.ndarray]:
+    """Lines of sight whose norm is within, at and beyond the beam's unit tolerance."""
+    u = np.array([0.6, -0.48, 0.64])
+    out = [u * s for s in (1.0, 1.0 + 5e-7, 1.0 + 1e-6, 1.0 + 1.0000001e-6, 1.0 - 1e-6, 1.0 + 2e-6, 0.0)]
+    return out + [np.array([math.nan, 0.0, 1.0]), np.array([0.6, 0.0, 0.8], dtype=np.float32)]
+
+
 def _ldv_samples() -> list[LdvSample]:
     out = [LdvSample(1, vv, 0.01, True) for vv in _norm_edges(LIM.ldv_speed)]
+    out += [LdvSample(1, vv, 0.01, True, beam=np.array([0.6, 0.0, 0.8])) for vv in _norm_edges(LIM.ldv_speed)]
+    out += [LdvSample(1, np.array([0.1, 0.0, 0.0]), 0.01, True, beam=b) for b in _beams()]
     out += [LdvSample(1, np.array([0.1, 0.0, 0.0]), 0.01, True, beam=np.array([1.0, 0.0, 0.0])),
             LdvSample(1, np.full(3, math.nan), math.nan, False), LdvSample(1, np.array([1, 2, 3]), 0.01, True)]
     return out
@@ -98,12 +107,13 @@ def test_the_accepts_say_yes_only_where_the_rules_pass_the_sample_as_given(compi
     imu = pl.imu_plausible if compiled else pl.imu_plausible.py_func
     master = pl.master_plausible if compiled else pl.master_plausible.py_func
     norm = pl.norm_within if compiled else pl.norm_within.py_func
+    beam = pl.beam_plausible if compiled else pl.beam_plausible.py_func
     with np.errstate(over='ignore'):          # interpreted, numpy's scalars warn where a square overflows
-        yes = _accepted(imu, master, norm)
+        yes = _accepted(imu, master, norm, beam)
     assert yes > 20                       # the usual samples are accepted without the rules
 
 
-def _accepted(imu, master, norm) -> int:
+def _accepted(imu, master, norm, beam) -> int:
     yes = 0
     for s in _imu_samples():
         if pl._vector(s.gyro) and pl._vector(s.accel) and imu(s.gyro, s.accel, LIM.gyro_max, LIM.accel_max):
@@ -119,6 +129,11 @@ def _accepted(imu, master, norm) -> int:
         if norm(v, 3, LIM.ldv_speed):
             yes += 1
             assert math.hypot(*v.tolist()) <= LIM.ldv_speed
+    beam_lim = pl.Limits.of(FilterConfig(ldv_mode='beam'))
+    for s in _ldv_samples():
+        if s.beam is not None and pl._vector(s.v_s) and pl._vector(s.beam) and beam(s.v_s, s.beam, LIM.ldv_speed):
+            yes += 1
+            assert pl.ldv_rules(s, beam_lim) == ''
     return yes
 
 
@@ -129,3 +144,6 @@ def test_the_accepts_leave_a_limit_to_the_rules():
     assert pl.norm_within(np.array([LIM.ldv_speed * (1.0 - 2e-9), 0.0, 0.0]), 3, LIM.ldv_speed)
     assert pl.within(np.array([400.0 * DEG, 0.0, 0.0]), LIM.gyro_max) == (400.0 * DEG <= LIM.gyro_max)
     assert not pl.within(np.array([16.0 * G0, 0.0]), LIM.accel_max)      # not a 3-vector
+    assert not pl.beam_plausible(np.zeros(3), np.array([0.0, 1.0]), LIM.ldv_speed)
+    assert pl.beam_plausible(np.zeros(3), np.array([0.0, 1.0 + 0.99e-6, 0.0]), LIM.ldv_speed)
+    assert not pl.beam_plausible(np.zeros(3), np.array([0.0, 1.0 + 1e-6, 0.0]), LIM.ldv_speed)

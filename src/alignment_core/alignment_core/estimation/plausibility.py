@@ -5,7 +5,7 @@ not the samples after it) is rejected and counted by reason; a master quaternion
 tolerance is normalised. The filter node adds 'frame_id' (it never passes such a message on).
 
 A compiled test first accepts the usual sample in one call (`imu_plausible`, `master_plausible`,
-`norm_within`): it says yes only where the rules surely do, with a margin on every norm, and
+`norm_within`, `beam_plausible`): it says yes only where the rules surely do, with a margin on every norm, and
 leaves everything else (a rejection, a sample near a limit, a quaternion to normalise, arrays
 that are not 1-D float64) to the rules, so the decisions are the rules' own."""
 from __future__ import annotations
@@ -28,7 +28,8 @@ from alignment_core.units import DEG, G0
 REASONS = ('nonfinite', 'out_of_order', 'quaternion', 'range', 'future_stamp', 'ldv_mode')
 UNIT_ROUNDING = 1e-12      # |norm - 1| below this is rounding: the quaternion is used as given
 NORM_MARGIN = 1e-9         # the compiled accept's relative margin on a norm against its limit
-QUATERNION_MARGIN = 1e-14  # ... and on a quaternion's norm against 1 (hypot and a plain sqrt differ by ulps)
+UNIT_MARGIN = 1e-14        # ... and on a unit quaternion's or beam's norm (hypot and a plain sqrt differ by ulps)
+BEAM_UNIT_TOLERANCE = 1e-6  # a beam's line of sight is a unit vector to this
 _NDARRAY = np.ndarray
 
 
@@ -116,7 +117,9 @@ def master_rules(s: MasterSample, lim: Limits) -> tuple[MasterSample | None, str
 def ldv_reason(s: LdvSample, lim: Limits) -> str:
     """A valid LDV sample must be finite and slower than the deck run allows, and of the LDV's
     kind (filter.ldv_mode): a beam sample carries a unit line of sight, a vector one none."""
-    if s.valid and s.beam is None and not lim.ldv_beam and _vector(s.v_s) and norm_within(s.v_s, 3, lim.ldv_speed):
+    if s.valid and (s.beam is not None) == lim.ldv_beam and _vector(s.v_s) and (
+            norm_within(s.v_s, 3, lim.ldv_speed) if s.beam is None
+            else _vector(s.beam) and beam_plausible(s.v_s, s.beam, lim.ldv_speed)):
         return ''
     return ldv_rules(s, lim)
 
@@ -127,7 +130,8 @@ def ldv_rules(s: LdvSample, lim: Limits) -> str:
         return ''
     if not finite(s.v_s) or (s.beam is not None and not finite(s.beam)):
         return 'nonfinite'
-    if (s.beam is not None) != lim.ldv_beam or (s.beam is not None and abs(_norm(s.beam) - 1.0) > 1e-6):
+    if (s.beam is not None) != lim.ldv_beam or (
+            s.beam is not None and abs(_norm(s.beam) - 1.0) > BEAM_UNIT_TOLERANCE):
         return 'ldv_mode'
     return 'range' if _norm(s.v_s) > lim.ldv_speed else ''
 
@@ -187,7 +191,21 @@ def master_plausible(p_w, q_nb, v_b, w_b, quaternion_tol, speed, rate, position)
         if not (-math.inf < q_nb[i] < math.inf):
             return False
         ss += q_nb[i] * q_nb[i]
-    return abs(math.sqrt(ss) - 1.0) + QUATERNION_MARGIN <= min(quaternion_tol, UNIT_ROUNDING)
+    return abs(math.sqrt(ss) - 1.0) + UNIT_MARGIN <= min(quaternion_tol, UNIT_ROUNDING)
+
+
+@kernel
+def beam_plausible(v_s, beam, speed):
+    """True if ldv_reason's rules surely accept a beam sample (v_s, beam): both finite, v_s
+    within speed and the line of sight a unit vector to BEAM_UNIT_TOLERANCE (margins as above)."""
+    if not norm_within(v_s, 3, speed) or beam.shape[0] != 3:
+        return False
+    ss = 0.0
+    for i in range(3):
+        if not (-math.inf < beam[i] < math.inf):
+            return False
+        ss += beam[i] * beam[i]
+    return abs(math.sqrt(ss) - 1.0) + UNIT_MARGIN <= BEAM_UNIT_TOLERANCE
 
 
 class InputGate:
