@@ -4,6 +4,7 @@ give the rules' answers (the same object, or the same normalised bits), and the 
 only where the rules accept as given. Compiled and interpreted alike."""
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -147,3 +148,46 @@ def test_the_accepts_leave_a_limit_to_the_rules():
     assert not pl.beam_plausible(np.zeros(3), np.array([0.0, 1.0]), LIM.ldv_speed)
     assert pl.beam_plausible(np.zeros(3), np.array([0.0, 1.0 + 0.99e-6, 0.0]), LIM.ldv_speed)
     assert not pl.beam_plausible(np.zeros(3), np.array([0.0, 1.0 + 1e-6, 0.0]), LIM.ldv_speed)
+
+
+@pytest.mark.parametrize('limit', [1e200, 1.3408e154, 1e150, 1e-150, 4.4668e-158, 1e-200, 5e-324, 0.0, -0.0, -5.0,
+                                   -math.inf, math.inf, math.nan])
+def test_any_limit_leaves_what_the_accept_cannot_decide_to_the_rules(limit):
+    """Limits whose squares would overflow or fall below the normal range (a configured 1e200 m/s
+    accepted a 1e300 m/s velocity before), zero, negative and non-finite ones: the checks give
+    the rules' answers for vectors at, around and far from the limit."""
+    lim = dataclasses.replace(LIM, master_speed=limit, master_rate=limit, position=limit, ldv_speed=limit)
+    values = [1e300, 1e200, 1e155, 1e-170, 5e-324, 1.0, 0.0]
+    if math.isfinite(limit) and limit != 0.0:
+        values += [abs(limit) * f for f in (0.5, 1.0 - 1e-12, 1.0, 1.0 + 1e-12, 1.00001, 2.0)]
+    u, q = np.array([1.0, 0.0, 0.0]), _quaternions()[0]
+    for x in values:
+        v = u * x
+        for s in (LdvSample(1, v, 0.01, True), LdvSample(1, v, 0.01, True, beam=np.array([0.6, 0.0, 0.8]))):
+            for lm in (lim, dataclasses.replace(lim, ldv_beam=True)):
+                assert pl.ldv_reason(s, lm) == pl.ldv_rules(s, lm), (x, s)
+        for m in (MasterSample(1, v, q, np.zeros(3), np.zeros(3)), MasterSample(1, np.zeros(3), q, v, np.zeros(3)),
+                  MasterSample(1, np.zeros(3), q, np.zeros(3), v)):
+            got, want = pl.master_check(m, lim), pl.master_rules(m, lim)
+            assert got[1] == want[1] and (got[0] is m) == (want[0] is m), (x, m)
+
+
+def test_configured_limits_are_floats_for_the_accepts():
+    """An int or numpy scalar in the config (10**20 m passes validation) reaches the kernels as a
+    float: no overflow or typing error where the rules answer."""
+    lim = pl.Limits.of(FilterConfig(position_max_m=10**20, ldv_speed_max_mps=np.float32(150.0)))
+    assert type(lim.position) is float and type(lim.ldv_speed) is float
+    m = _master_samples()[0]
+    assert pl.master_check(m, lim) == pl.master_rules(m, lim)
+    s = LdvSample(1, np.array([1.0, 0.0, 0.0]), 0.01, True)
+    assert pl.ldv_reason(s, lim) == pl.ldv_rules(s, lim) == ''
+
+
+def test_the_interpreted_accepts_square_nothing_that_overflows():
+    """Interpreted (NUMBA_DISABLE_JIT), numpy's scalars would warn or raise where a square
+    overflows: a component beyond the limit, or beyond 2 for a unit vector, decides first."""
+    big = np.array([1e200, 0.0, 0.0])
+    with np.errstate(over='raise'):
+        assert not pl.norm_within.py_func(big, 3, 150.0)
+        assert not pl.near_unit.py_func(np.array([1e200, 0.0, 0.0, 1.0]), 4, 1e-12)
+        assert not pl.beam_plausible.py_func(np.zeros(3), big, 150.0)

@@ -30,12 +30,14 @@ UNIT_ROUNDING = 1e-12      # |norm - 1| below this is rounding: the quaternion i
 NORM_MARGIN = 1e-9         # the compiled accept's relative margin on a norm against its limit
 UNIT_MARGIN = 1e-14        # ... and on a unit quaternion's or beam's norm (hypot and a plain sqrt differ by ulps)
 BEAM_UNIT_TOLERANCE = 1e-6  # a beam's line of sight is a unit vector to this
+NORM_RANGE = (1e-150, 1e150)  # limits the compiled norm test takes (squares normal, none overflowing)
 _NDARRAY = np.ndarray
 
 
 @dataclass(frozen=True)
 class Limits:
-    """The plausibility limits in SI units (rad/s, m/s^2, m/s, m, ns), from filter.*."""
+    """The plausibility limits in SI units (rad/s, m/s^2, m/s, m, ns), from filter.*, as floats
+    (a configured int or numpy scalar converted: the compiled accepts take floats)."""
     quaternion_tol: float
     gyro_max: float                  # per axis
     accel_max: float                 # per axis
@@ -52,9 +54,10 @@ class Limits:
     def of(cls, cfg: FilterConfig) -> Limits:
         """The streams' known latencies add to the lead a stamp may legitimately have."""
         lead = cfg.future_stamp_s + max(cfg.master_latency_s, cfg.ldv_latency_s, cfg.doppler_latency_s)
-        return cls(cfg.quaternion_norm_tolerance, cfg.imu_gyro_range_dps * DEG, cfg.imu_accel_range_g * G0,
-                   cfg.master_speed_max_mps, cfg.master_rate_max_dps * DEG, cfg.position_max_m,
-                   cfg.ldv_speed_max_mps, cfg.doppler_speed_max_mps, cfg.ldv_mode == 'beam', int(round(lead * 1e9)),
+        return cls(float(cfg.quaternion_norm_tolerance), float(cfg.imu_gyro_range_dps * DEG),
+                   float(cfg.imu_accel_range_g * G0), float(cfg.master_speed_max_mps),
+                   float(cfg.master_rate_max_dps * DEG), float(cfg.position_max_m), float(cfg.ldv_speed_max_mps),
+                   float(cfg.doppler_speed_max_mps), cfg.ldv_mode == 'beam', int(round(lead * 1e9)),
                    int(round(cfg.silence_warn_s * 1e9)))
 
 
@@ -158,18 +161,35 @@ def within(a, limit):
 
 @kernel
 def norm_within(a, size, limit):
-    """True if a (size,) is finite and surely |a| <= limit: |a| from its plain sum of squares,
-    within NORM_MARGIN of the limit (hypot's |a| and this one differ by a few ulps; nearer the
-    limit, or overflowing, the rules decide)."""
-    if a.shape[0] != size:
+    """True if a (size,) is finite and surely |a| <= limit (a float): |a| from its plain sum of
+    squares, within NORM_MARGIN of the limit (hypot's |a| and this one differ by a few ulps;
+    nearer the limit the rules decide). Only for a limit in NORM_RANGE, where neither the squares
+    nor the bound's can overflow or lose their precision below the normal range (each component
+    is first checked against the limit: no square exceeds the limit's)."""
+    if a.shape[0] != size or not NORM_RANGE[0] < limit < NORM_RANGE[1]:
         return False
     ss = 0.0
     for i in range(size):
-        if not (-math.inf < a[i] < math.inf):
+        if not abs(a[i]) <= limit:             # NaN and inf too
             return False
         ss += a[i] * a[i]
     bound = limit * (1.0 - NORM_MARGIN)
     return ss <= bound * bound
+
+
+@kernel
+def near_unit(a, size, tolerance):
+    """True if a (size,) is finite and its norm surely within tolerance of 1 (UNIT_MARGIN: a
+    plain square root against the rules' hypot); no component of a unit vector exceeds 1, so a
+    larger one (NaN and inf included) is no unit vector here, and no square overflows."""
+    if a.shape[0] != size:
+        return False
+    ss = 0.0
+    for i in range(size):
+        if not abs(a[i]) <= 2.0:
+            return False
+        ss += a[i] * a[i]
+    return abs(math.sqrt(ss) - 1.0) + UNIT_MARGIN <= tolerance
 
 
 @kernel
@@ -184,28 +204,14 @@ def master_plausible(p_w, q_nb, v_b, w_b, quaternion_tol, speed, rate, position)
     its quaternion's norm within rounding of 1 (and the tolerance), with the margins above."""
     if not (norm_within(v_b, 3, speed) and norm_within(w_b, 3, rate) and norm_within(p_w, 3, position)):
         return False
-    if q_nb.shape[0] != 4:
-        return False
-    ss = 0.0
-    for i in range(4):
-        if not (-math.inf < q_nb[i] < math.inf):
-            return False
-        ss += q_nb[i] * q_nb[i]
-    return abs(math.sqrt(ss) - 1.0) + UNIT_MARGIN <= min(quaternion_tol, UNIT_ROUNDING)
+    return near_unit(q_nb, 4, min(quaternion_tol, UNIT_ROUNDING))
 
 
 @kernel
 def beam_plausible(v_s, beam, speed):
     """True if ldv_reason's rules surely accept a beam sample (v_s, beam): both finite, v_s
     within speed and the line of sight a unit vector to BEAM_UNIT_TOLERANCE (margins as above)."""
-    if not norm_within(v_s, 3, speed) or beam.shape[0] != 3:
-        return False
-    ss = 0.0
-    for i in range(3):
-        if not (-math.inf < beam[i] < math.inf):
-            return False
-        ss += beam[i] * beam[i]
-    return abs(math.sqrt(ss) - 1.0) + UNIT_MARGIN <= BEAM_UNIT_TOLERANCE
+    return norm_within(v_s, 3, speed) and near_unit(beam, 3, BEAM_UNIT_TOLERANCE)
 
 
 class InputGate:
