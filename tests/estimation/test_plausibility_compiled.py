@@ -14,7 +14,7 @@ import pytest
 from alignment_core.estimation import plausibility as pl
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.samples import ImuSample, LdvSample, MasterSample
-from alignment_core.units import DEG, G0
+from alignment_core.units import G0
 
 LIM = pl.Limits.of(FilterConfig())
 UP = math.nextafter
@@ -143,7 +143,8 @@ def test_the_accepts_leave_a_limit_to_the_rules():
     says no (the margin); the rules then accept or reject."""
     assert not pl.norm_within(np.array([LIM.ldv_speed, 0.0, 0.0]), 3, LIM.ldv_speed)
     assert pl.norm_within(np.array([LIM.ldv_speed * (1.0 - 2e-9), 0.0, 0.0]), 3, LIM.ldv_speed)
-    assert pl.within(np.array([400.0 * DEG, 0.0, 0.0]), LIM.gyro_max) == (400.0 * DEG <= LIM.gyro_max)
+    assert pl.within(np.array([LIM.gyro_max, 0.0, 0.0]), LIM.gyro_max)          # the full scale itself: in range
+    assert not pl.within(np.array([UP(LIM.gyro_max, math.inf), 0.0, 0.0]), LIM.gyro_max)
     assert not pl.within(np.array([16.0 * G0, 0.0]), LIM.accel_max)      # not a 3-vector
     assert not pl.beam_plausible(np.zeros(3), np.array([0.0, 1.0]), LIM.ldv_speed)
     assert pl.beam_plausible(np.zeros(3), np.array([0.0, 1.0 + 0.99e-6, 0.0]), LIM.ldv_speed)

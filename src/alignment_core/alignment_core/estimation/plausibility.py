@@ -5,9 +5,9 @@ not the samples after it) is rejected and counted by reason; a master quaternion
 tolerance is normalised. The filter node adds 'frame_id' (it never passes such a message on).
 
 A compiled test first accepts the usual sample in one call (`imu_plausible`, `master_plausible`,
-`norm_within`, `beam_plausible`): it says yes only where the rules surely do, with a margin on every norm, and
-leaves everything else (a rejection, a sample near a limit, a quaternion to normalise, arrays
-that are not 1-D float64) to the rules, so the decisions are the rules' own."""
+`norm_within`, `beam_plausible`): it says yes only where the rules surely do, with a margin on
+every norm, and leaves everything else (a rejection, a sample near a limit, a quaternion to
+normalise, arrays that are not 1-D float64) to the rules, so the decisions are the rules' own."""
 from __future__ import annotations
 
 import dataclasses

@@ -100,7 +100,8 @@ def _isotropic(cells: list[float]) -> bool:
     BEAM_RANK_TOLERANCE of the trace, and one that does not converge is no beam either: so it
     is not a beam without solving for the eigenvalues."""
     c = cells[0]
-    return cells[4] == c and cells[8] == c and not any(cells[k] for k in (1, 2, 3, 5, 6, 7))
+    return cells[4] == c and cells[8] == c and not (cells[1] or cells[2] or cells[3] or cells[5] or cells[6]
+                                                     or cells[7])
 
 
 def _isotropic_stack(cov: np.ndarray) -> np.ndarray:
