@@ -184,3 +184,51 @@ def test_not_installed_over_another_numba_or_another_boxer(case, monkeypatch):
         expect = foreign
     assert compiled_boxing.install() is False
     assert boxers[array] is expect
+
+
+def test_numbas_pickler_rebuilds_numpys_own_float64_descriptor():
+    """A cached kernel's environment (the dtypes of the arrays it returns) is pickled by numba's
+    pickler: numpy's native float64 comes back as numpy's own descriptor, any other dtype as numpy
+    rebuilds it, and the standard pickler is left as it is."""
+    import copyreg
+    import pickle
+
+    _numba()
+    from numba.core.serialize import dumps
+    f8 = np.dtype(np.float64)
+    assert pickle.loads(dumps(f8)) is f8
+    swapped = pickle.loads(dumps(f8.newbyteorder()))
+    assert swapped == f8.newbyteorder() and swapped != f8
+    tagged = pickle.loads(dumps(np.dtype(np.float64, metadata={'unit': 'm'})))
+    assert tagged is not f8 and tagged.metadata == {'unit': 'm'}
+    for d in (np.dtype(np.float32), np.dtype(np.int64), np.dtype([('a', 'f8')])):
+        assert pickle.loads(dumps(d)) == d
+    assert type(f8) not in copyreg.dispatch_table
+
+
+CACHED_KERNEL = '''
+import sys
+import numpy as np
+from alignment_core.compiled import FLOAT64, kernel
+
+@kernel
+def doubled(a):
+    return a * 2.0
+
+out = doubled(np.arange(3.0))
+print(out.dtype is FLOAT64, len(doubled.stats.cache_hits))
+'''
+
+
+def test_an_array_from_a_kernel_loaded_from_the_cache_has_numpys_own_float64(tmp_path):
+    """Compiled in one process and loaded from the disk cache in the next, a kernel's new float64
+    array carries numpy's own descriptor (as_float64 takes it by its identity test)."""
+    import os
+    import subprocess
+    (tmp_path / 'cached_kernel.py').write_text(CACHED_KERNEL)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / 'cache'))
+    env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(tmp_path), env.get('PYTHONPATH')]))
+    runs = [subprocess.run([sys.executable, '-c', 'import cached_kernel'], env=env, capture_output=True,
+                           text=True, timeout=120, check=True).stdout.split() for _ in range(2)]
+    assert runs[0] == ['True', '0']           # compiled here
+    assert runs[1][0] == 'True' and runs[1][1] != '0'          # loaded from the cache

@@ -166,6 +166,7 @@ def test_without_bias_states_the_rate_variance_takes_the_given_bias_variance():
     none = np.array([], dtype=np.int64)
     q, z = np.array([0.0, 0.0, 0.0, 1.0]), np.zeros(3)
     for fun in (odometry_parts, odometry_parts.py_func):
-        _, _, pose, twist = fun(q, z, z, z, False, np.eye(6), np.arange(3), none, none, 2.0, 2.5)
+        _, _, pose, twist, parts_finite = fun(q, z, z, z, False, np.eye(6), np.arange(3), none, none, 2.0, 2.5)
+        assert parts_finite
         np.testing.assert_array_equal(np.diag(twist), [-1.0, -1.0, -1.0, 2.5, 2.5, 2.5])
         np.testing.assert_array_equal(np.diag(pose), [-1.0, -1.0, -1.0, 1.0, 1.0, 1.0])

@@ -35,6 +35,23 @@ def test_the_options_states_are_named_and_an_unknown_state_is_refused():
         StateEstimate(('phi_E', 'bogus_x'))
 
 
+@pytest.mark.parametrize('dtype', [np.float64, np.float32])
+def test_the_values_are_numpys_sums(dtype):
+    """values() sums in Python floats: numpy's float64 sums of x and the corrections, bit for bit,
+    whatever their precision (a float32 filter's state and corrections are widened exactly)."""
+    m = make_model(FilterConfig(lever_arm_states=True))
+    s = StateEstimate(m.labels)
+    rng = np.random.default_rng(4)
+    x = rng.standard_normal(m.n).astype(dtype)
+    corr = Corrections(bg=rng.standard_normal(3).astype(dtype), ba=rng.standard_normal(3).astype(dtype),
+                       dr=rng.standard_normal(3).astype(dtype))
+    want = np.array(x, dtype=float)
+    for i, name, axis in s._fed:
+        want[i] += getattr(corr, name)[axis]
+    got = s.values(x, corr)
+    assert got.dtype == np.float64 and got.tobytes() == want.tobytes()
+
+
 def test_fed_back_states_add_their_correction_the_others_do_not():
     """vm15 + lever arm: x has every state 1; corrections bg = 10, 20, 30, ba = 4, 5, 6, dr = 7, 8, 9."""
     m = make_model(FilterConfig(lever_arm_states=True))

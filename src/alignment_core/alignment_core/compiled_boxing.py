@@ -15,11 +15,22 @@ return costs changes. Compiled code keeps the boxer it was compiled with: a cach
 (in a user's NUMBA_CACHE_DIR; the package's own cache directory is named by its sources' digest)
 still returns arrays numba's way.
 
+The dtype a returned array carries is an environment constant too, and the environment is
+pickled into the disk cache. numpy's reduce of a dtype rebuilds it as a copy, so an array returned
+by a kernel loaded from the cache had a float64 descriptor equal to numpy's but another object,
+and as_float64's identity test (compiled.py) fell through to the equality test on every kernel
+operand that such an array became. Pickled by numba's pickler (its cache, nothing else), numpy's
+native float64 descriptor is rebuilt as numpy's own (`_reduce_dtype`).
+
 It is installed only under the numba it was written against (`NUMBA_VERSION`, the version
 requirements.txt pins) and only over numba's own boxer; any other numba keeps its own."""
 from __future__ import annotations
 
 from typing import Any
+
+import numpy as np
+
+_FLOAT64 = np.dtype(np.float64)
 
 NUMBA_VERSION = '0.68.1'
 
@@ -35,8 +46,18 @@ def install() -> bool:
         return True
     if numba.__version__ != NUMBA_VERSION or current is not boxing.box_array:
         return False
+    from numba.core.serialize import NumbaPickler
+    NumbaPickler.dispatch_table[type(_FLOAT64)] = _reduce_dtype
     boxers[types.Array] = _box_array
     return True
+
+
+def _reduce_dtype(d: Any) -> Any:
+    """numpy's native float64 descriptor as np.dtype('f8') (numpy's own object when unpickled);
+    any other descriptor of its class (byte-swapped, with metadata) as numpy reduces it."""
+    if d is _FLOAT64 or (d == _FLOAT64 and d.metadata is None):
+        return np.dtype, ('f8',)
+    return d.__reduce__()
 
 
 def _box_array(typ: Any, val: Any, c: Any) -> Any:

@@ -11,8 +11,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from alignment_core.compiled import as_float, as_float64, kernel
-from alignment_core.estimation.health import ERROR, OK, finite
+from alignment_core.compiled import FLOAT64, as_float, as_float64, kernel
+from alignment_core.estimation.health import ERROR, OK, all_finite, finite
 from alignment_core.estimation.matching import LiveSolution, MatchResults
 from alignment_core.estimation.models import ErrorModel
 from alignment_core.estimation.models.base import DV, EPS
@@ -23,6 +23,7 @@ from alignment_core.geometry.rotations_compiled import quat_to_dcm_k
 from alignment_core.navigation.strapdown import NavState
 from alignment_core.units import DEG, DPH
 
+_NDARRAY = np.ndarray
 UNKNOWN = -1.0            # a covariance diagonal of -1: not estimated (as /alignment/attitude's position)
 
 
@@ -45,8 +46,8 @@ class OdometryMaker:
                  gyro_bias_sigma_dph: float) -> None:
         self._plane = plane
         n = len(model.kinds)
-        self._att = np.arange(n)[model.attitude]
-        if len(self._att) != 3:
+        self.attitude_states = np.arange(n)[model.attitude]          # (3,) indices
+        if len(self.attitude_states) != 3:
             raise ValueError(f'the attitude states {model.attitude} of the model are not three')
         dv = [i for i, k in enumerate(model.kinds) if k == DV]
         self._dv = np.array(dv if len(dv) == 3 else [], dtype=np.int64)
@@ -61,20 +62,34 @@ class OdometryMaker:
         """p: the filter's covariance; gyro: the last raw gyro rate (None before the first IMU
         step), bg its bias estimate. The body rate w.r.t. the nav frame is the gyro's less the nav
         frame's own rate w.r.t. inertial space (Earth rate and transport rate at the solution)."""
+        return self._make(st, p, gyro, bg)[0]
+
+    def make_finite(self, st: NavState, p: np.ndarray, gyro: np.ndarray | None, bg: np.ndarray) -> Odometry | None:
+        """`make`, or None when any of its numbers (position, velocity, rate, their covariances)
+        is not finite."""
+        odo, parts_finite = self._make(st, p, gyro, bg)
+        if not parts_finite:
+            return None
+        if self._pos is not None and not finite(odo.pose_cov):
+            return None
+        return odo if finite(odo.p_w) else None
+
+    def _make(self, st: NavState, p: np.ndarray, gyro: np.ndarray | None, bg: np.ndarray) -> tuple[Odometry, bool]:
+        """(`make`, whether its velocity, rate and covariances before the position's are finite)."""
         v_e, v_n, _ = as_float64(st.v_n).tolist()
         w_in = np.array(earth.nav_rate_point(st.lat, st.h, v_e, v_n))
         p_w = self._plane.from_geodetic_point(st.lat, st.lon, st.h)
         w_m = w_in if gyro is None else gyro - bg
         p = as_float(p)
-        v_b, w_b, pose, twist = odometry_parts(
+        v_b, w_b, pose, twist, parts_finite = odometry_parts(
             as_float64(st.q_nb), as_float64(st.v_n), as_float64(w_in), as_float64(w_m), gyro is not None, p,
-            self._att, self._dv, self._eps, p.dtype.type(self._rate_var), self._rate_var + self._bias_var)
+            self.attitude_states, self._dv, self._eps, p.dtype.type(self._rate_var), self._rate_var + self._bias_var)
         if self._pos is not None:
             r_m, r_n = earth.radii(st.lat)
             i_lon, i_lat = self._pos
             pose[0, 0] = p[i_lon, i_lon] * (float(r_n) + st.h) ** 2 * math.cos(st.lat) ** 2
             pose[1, 1] = p[i_lat, i_lat] * (float(r_m) + st.h) ** 2
-        return Odometry(p_w, v_b, w_b, pose, twist)
+        return Odometry(p_w, v_b, w_b, pose, twist), parts_finite
 
 
 class EstimateMaker:
@@ -94,12 +109,18 @@ class EstimateMaker:
         odometry (for `make` at the same instant); None if the covariance, the published
         misalignment or the odometry (position, velocity, rate, their covariances) is not finite:
         a non-finite output is a breakdown (docs/engine.md), never an output at OK."""
-        att, p = self._model.attitude, live.kf.P
-        cov, sigma = p[att, att].copy(), np.sqrt(np.diag(p))
-        if not (finite(cov, sigma) and finite(res.mu, res.mu_sigma)):
+        p = live.kf.P
+        mu, mu_sigma = res.mu, res.mu_sigma
+        if type(p) is _NDARRAY and p.dtype.char in 'fd' and _is_vector(mu) and _is_vector(mu_sigma):
+            cov, sigma, ok = covariance_parts(p, self._odometry.attitude_states, mu, mu_sigma)
+        else:
+            att = self._model.attitude
+            cov, sigma = p[att, att].copy(), np.sqrt(np.diag(p))
+            ok = finite(cov, sigma) and finite(mu, mu_sigma)
+        if not ok:
             return None
-        odo = self._odometry.make(live.ins.s, p, live.gyro, res.corr.bg)
-        if not finite(odo.p_w, odo.v_b, odo.w_b, odo.pose_cov, odo.twist_cov):
+        odo = self._odometry.make_finite(live.ins.s, p, live.gyro, res.corr.bg)
+        if odo is None:
             return None
         self.held = (cov, sigma, live.kf.diagnostics(), odo.pose_cov, odo.twist_cov)
         self.held_state = self.state.values(live.kf.x, res.corr)
@@ -149,6 +170,17 @@ class PublishGuard:
         self.holding = False
 
     def good(self, e: Estimate) -> bool:
+        """Finite, a unit attitude quaternion, the misalignment and its sigma within the bound; an
+        estimate of float64 arrays is first offered to one compiled check that says yes only where
+        these rules surely do (`surely_good`)."""
+        arrays = (e.misalignment, e.misalignment_sigma, e.q_nb, e.attitude_cov, e.x, e.sigma, e.p_w, e.v_b, e.w_b,
+                  e.pose_cov, e.twist_cov, e.state)
+        if all(type(a) is _NDARRAY and a.dtype == FLOAT64 for a in arrays) and \
+                surely_good(*arrays, self.max_misalignment):
+            return True
+        return self._good_by_rules(e)
+
+    def _good_by_rules(self, e: Estimate) -> bool:
         arrays = [e.misalignment, e.misalignment_sigma, e.q_nb, e.attitude_cov, e.x, e.sigma]
         arrays += [a for a in (e.p_w, e.v_b, e.w_b, e.pose_cov, e.twist_cov, e.state) if a is not None]
         if not finite(*arrays):
@@ -188,9 +220,67 @@ def prior_estimate(e: Estimate, mu_sigma: np.ndarray, p0: np.ndarray, att: slice
         nis=math.nan, p_w=None, v_b=None, w_b=None, pose_cov=None, twist_cov=None, state=np.zeros(len(e.x)))
 
 
+def _is_vector(a: object) -> bool:
+    """a a float64 numpy vector (covariance_parts' misalignment operands)."""
+    return type(a) is _NDARRAY and a.dtype == FLOAT64 and a.ndim == 1
+
+
+@kernel
+def covariance_parts(p, att, mu, mu_sigma):
+    """(the attitude block P[att, att] (3, 3), sqrt(diag P) (n,), and whether both and the
+    misalignment mu and its sigma (float64 vectors) are all finite) of a covariance p (n, n),
+    float64 or float32, att the attitude states (3,): EstimateMaker.keep's numpy lines in one
+    call, the same numbers (a copy, and square roots in p's precision)."""
+    n = p.shape[0]
+    cov = np.empty((3, 3), p.dtype)
+    sigma = np.empty(n, p.dtype)
+    ok = True
+    for i in range(3):
+        for j in range(3):
+            v = p[att[i], att[j]]
+            cov[i, j] = v
+            ok = ok and -math.inf < v < math.inf
+    for i in range(n):
+        v = np.sqrt(p[i, i])
+        sigma[i] = v
+        ok = ok and -math.inf < v < math.inf
+    for i in range(mu.shape[0]):
+        ok = ok and -math.inf < mu[i] < math.inf
+    for i in range(mu_sigma.shape[0]):
+        ok = ok and -math.inf < mu_sigma[i] < math.inf
+    return cov, sigma, ok
+
+
+@kernel
+def surely_good(mu, mu_sigma, q, att_cov, x, sigma, p_w, v_b, w_b, pose, twist, state, bound):
+    """True only where PublishGuard's rules surely call an estimate of float64 arrays good (every
+    number finite, |q . q - 1| <= 1e-6, |mu| and mu_sigma within bound). q . q is summed here in
+    order, which may differ from numpy's BLAS dot in the last bits, so a norm within 1e-12 of the
+    tolerance is left to the rules (False), as is anything they reject."""
+    if not (all_finite(mu) and all_finite(mu_sigma) and all_finite(q) and all_finite(att_cov) and all_finite(x)
+            and all_finite(sigma) and all_finite(p_w) and all_finite(v_b) and all_finite(w_b)
+            and all_finite(pose) and all_finite(twist) and all_finite(state)):
+        return False
+    if q.shape[0] != 4 or mu.shape[0] == 0 or mu_sigma.shape[0] == 0:      # the rules' max() raises on empty
+        return False
+    qq = 0.0
+    for v in q:
+        qq += v * v
+    if not abs(qq - 1.0) <= 1e-6 - 1e-12:
+        return False
+    for v in mu:
+        if not abs(v) <= bound:
+            return False
+    for v in mu_sigma:
+        if not v <= bound:
+            return False
+    return True
+
+
 @kernel
 def odometry_parts(q_nb, v_n, w_in, w_m, has_rate, p, att, dv, eps, rate_var, rate_bias_var):
-    """(v_b, w_b (3,), pose_cov, twist_cov (6, 6)) of OdometryMaker.make: q_nb (4,), v_n, the nav
+    """(v_b, w_b (3,), pose_cov, twist_cov (6, 6), whether all four are finite) of
+    OdometryMaker.make: q_nb (4,), v_n, the nav
     frame's rate w_in and the measured rate w_m = gyro - bias (3,); has_rate False: w_b is zero;
     p (n, n) the filter's covariance (float64 or float32); att, dv, eps: the indices (3,) of the
     attitude, velocity and gyro bias states (dv, eps empty: the model lacks them, velocity
@@ -217,4 +307,10 @@ def odometry_parts(q_nb, v_n, w_in, w_m, has_rate, p, att, dv, eps, rate_var, ra
         if dv.shape[0] != 3:
             twist[i, i] = UNKNOWN
         twist[3 + i, 3 + i] = rate_var + p[eps[i], eps[i]] if eps.shape[0] == 3 else rate_bias_var
-    return v_b, w_b, pose, twist
+    ok = True
+    for i in range(3):
+        ok = ok and -math.inf < v_b[i] < math.inf and -math.inf < w_b[i] < math.inf
+    for i in range(6):
+        for j in range(6):
+            ok = ok and -math.inf < pose[i, j] < math.inf and -math.inf < twist[i, j] < math.inf
+    return v_b, w_b, pose, twist, ok

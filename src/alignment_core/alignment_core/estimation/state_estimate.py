@@ -57,7 +57,11 @@ class StateEstimate:
 
     def values(self, x: np.ndarray, corr: Corrections) -> np.ndarray:
         """(n,) the accumulated estimate: the filter's state x (after feedback) plus the corrections."""
-        out = np.array(x, dtype=float)
+        out = np.array(x, dtype=float).tolist()        # Python floats: numpy's sums, a third of its time
+        fed: dict[str, list[float]] = {}
         for i, name, axis in self._fed:
-            out[i] += getattr(corr, name)[axis]
-        return out
+            c = fed.get(name)
+            if c is None:
+                c = fed[name] = np.asarray(getattr(corr, name), dtype=float).tolist()
+            out[i] += c[axis]
+        return np.array(out)
