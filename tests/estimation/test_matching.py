@@ -11,7 +11,8 @@ def test_reference_velocities_are_the_rigid_body_velocity_of_the_spot():
     """A point at lever arm r on a body turning at w_b moves at v_b + w_b x r (plus the LDV's
     relative velocity), in nav axes through C_m: against scipy's rotation matrix and numpy's
     cross product. The lever arm is the deck displacement alone, after the surveyed spot, or
-    after the spot and its correction, with numpy's sums; a beam is rotated into nav axes by C_m.
+    after the spot and its correction, with numpy's sums; a beam and the body rate are rotated into
+    nav axes by C_m.
     The compiled kernel equals its interpreted form bit for bit."""
     rng = np.random.default_rng(5)
     for k in range(60):
@@ -22,7 +23,7 @@ def test_reference_velocities_are_the_rigid_body_velocity_of_the_spot():
         arm = (DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED)[k % 3]
         beam = rng.normal(0.0, 1.0, 3) if k % 2 else np.empty(0)
         args = (q, w_b, v_b, r0, dr, disp, arm, v_rel, beam)
-        c_m, r, u_n, v_ref, beam_n = reference_velocities(*args)
+        c_m, r, u_n, v_ref, beam_n, w_n = reference_velocities(*args)
         r_true = (disp, r0 + disp, r0 + dr + disp)[arm]
         assert r.tobytes() == r_true.tobytes() and r is not disp
         c_true = Rotation.from_quat(q).as_matrix()
@@ -35,5 +36,7 @@ def test_reference_velocities_are_the_rigid_body_velocity_of_the_spot():
             assert beam_n.tobytes() == (c_m @ beam).tobytes()          # numpy's product, as the engine had it
         else:
             assert beam_n.shape == (0,)
-        for got, want in zip((c_m, r, u_n, v_ref, beam_n), reference_velocities.py_func(*args), strict=True):
+        np.testing.assert_allclose(w_n, c_true @ w_b, rtol=0.0, atol=1e-15)
+        assert w_n.tobytes() == (c_m @ w_b).tobytes()                  # numpy's product, as the delay state had it
+        for got, want in zip((c_m, r, u_n, v_ref, beam_n, w_n), reference_velocities.py_func(*args), strict=True):
             assert got.tobytes() == want.tobytes()

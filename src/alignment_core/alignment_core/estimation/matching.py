@@ -63,6 +63,7 @@ class Reference(NamedTuple):
     v_ref: np.ndarray        # (3,) master velocity + u_n
     moving: bool             # the LDV at the validity time says the aircraft moves
     beam_n: np.ndarray | None = None   # (3,) a beam LDV's unit line of sight, nav frame (models/beam.py)
+    w_n: np.ndarray | None = None      # (3,) the master's body rate in nav axes, C_m w_b (None: not made)
 
 
 @dataclass
@@ -184,10 +185,10 @@ class Matcher:
         # a beam LDV is the measurement parked too (its one row); a vector one only once moving
         v_rel = ldv.v_s if (ldv is not None and ldv.valid and (moving or beam is not None)) else np.zeros(3)
         arm = SURVEYED_CORRECTED if surveyed else self._arm
-        c_m, r, u_n, v_ref, beam_n = reference_velocities(
+        c_m, r, u_n, v_ref, beam_n, w_n = reference_velocities(
             as_float64(m.q_nb), as_float64(m.w_b), as_float64(m.v_b), self._r0, as_float64(self.results.corr.dr),
             as_float64(disp), arm, as_float64(v_rel), _NONE if beam is None else as_float64(beam))
-        return Reference(c_m, r, v_rel, u_n, v_ref, moving, None if beam is None else beam_n)
+        return Reference(c_m, r, v_rel, u_n, v_ref, moving, None if beam is None else beam_n, w_n)
 
     def extras(self, live: LiveSolution, t_v: int, m: MasterSample, ref: Reference) -> Extras:
         """(w_n, a_n, rate inputs) for the delay state and rate matching (models/master_delay.py,
@@ -200,7 +201,7 @@ class Matcher:
         airframe's own motion on its gear, and two master samples 20 ms apart their velocity noise
         times 70 per m/s (both errors in the regressor pull the delay toward zero)."""
         c_m, r, v_rel = ref.c_m, ref.r, ref.v_rel
-        w_n = c_m @ m.w_b
+        w_n = c_m @ m.w_b if ref.w_n is None else ref.w_n
         prev, self._prev_master = self._prev_master, (t_v, c_m, m.v_b, m.w_b)
         iv = None
         for item in reversed(self._intervals):
@@ -378,14 +379,15 @@ class Matcher:
 
 @kernel
 def reference_velocities(q_nb, w_b, v_b, r0, dr, disp, arm, v_rel, beam):
-    """(C_m (3, 3), the lever arm r, u_n = C_m (w_b x r + v_rel), v_ref = C_m v_b + u_n, C_m beam)
+    """(C_m (3, 3), the lever arm r, u_n = C_m (w_b x r + v_rel), v_ref = C_m v_b + u_n, C_m beam, C_m w_b)
     of a master sample's quaternion q_nb (4,), body rate w_b and velocity v_b (3,), with the LDV
     velocity v_rel and its line of sight beam (3,, ship axes; empty for a vector LDV: an empty
     result): the reference's attitude, the spot's velocity relative to the master, the velocity
     the slave should have and the beam in nav axes. The lever arm (ship axes) is the deck
     displacement disp (3,) alone (arm DISPLACEMENT), after the surveyed spot r0 (SURVEYED) or
-    after r0 and its estimated correction dr (SURVEYED_CORRECTED: (r0 + dr) + disp). One kernel
-    for what were ten numpy calls."""
+    after r0 and its estimated correction dr (SURVEYED_CORRECTED: (r0 + dr) + disp). Also the
+    master's rate in nav axes C_m w_b, the delay state's (numpy's C_m @ w_b: the same BLAS gemv).
+    One kernel for what were eleven numpy calls."""
     if arm == DISPLACEMENT:
         r = disp.copy()
     elif arm == SURVEYED:
@@ -396,4 +398,4 @@ def reference_velocities(q_nb, w_b, v_b, r0, dr, disp, arm, v_rel, beam):
     rel = np.array(cross_k((w_b[0], w_b[1], w_b[2]), (r[0], r[1], r[2]))) + v_rel
     u_n = np.dot(c_m, rel)
     beam_n = np.dot(c_m, beam) if beam.shape[0] == 3 else np.empty(0)
-    return c_m, r, u_n, np.dot(c_m, v_b) + u_n, beam_n
+    return c_m, r, u_n, np.dot(c_m, v_b) + u_n, beam_n, np.dot(c_m, w_b)
