@@ -180,6 +180,27 @@ def test_the_carriers_master_stepped_equals_batch_bit_for_bit():
             assert getattr(a.sample, f).tobytes() == getattr(b.sample, f).tobytes(), f
 
 
+@pytest.mark.parametrize('arw', [0.0, 0.002], ids=['noise-free', 'noisy'])
+def test_schuler_steps_in_blocks_equal_steps_one_by_one(arw):
+    """step_many (one compiled loop per run of equal intervals, the noise drawn as a block) gives
+    what step gives one stamp at a time, bit for bit: the states, the state after, and the noise
+    stream after; over intervals that change (a jittered master), and continued across calls."""
+    cfg = MasterConfig(model='schuler', damping='velocity', gyrocompass_tau_s=3600.0, arw_dpsh=arw,
+                       vrw_ugpshz=5.0 if arw else 0.0)
+    u = np.array([0.01 * DPH, -0.02 * DPH, 0.005 * DPH, 30.0 * UG, -20.0 * UG])
+    one, many = (SchulerErrorModel(cfg, 0.6, u, stage_rng(7, 'test')) for _ in range(2))
+    gaps = np.r_[np.full(40, 20_000_000), 19_000_000, 21_000_000, np.full(30, 20_000_000), 20_000_001,
+                 np.full(5, 10_000_000), 40_000_000]
+    t = 5_000_000_000 + np.r_[0, np.cumsum(gaps)]
+    blocks = (t[:1], t[1:2], t[2:50], t[50:51], t[51:])
+    got = np.concatenate([many.step_many(b) for b in blocks] + [many.step_many(t[:0])])
+    want = np.array([one.step(int(k)) for k in t])
+    assert got.shape == want.shape == (len(t), 5)
+    assert got.tobytes() == want.tobytes()
+    assert many.x.tobytes() == one.x.tobytes() and many.t_ns == one.t_ns
+    assert many.rng.standard_normal(3).tobytes() == one.rng.standard_normal(3).tobytes()
+
+
 def test_default_master_is_todays_constant_model():
     sc = scenario.load('catapult_paper', {'duration_s': 1.0})
     assert sc.master.model == 'constant' and sc.master.rate_hz == 0.0 and sc.master.latency_s == 0.0

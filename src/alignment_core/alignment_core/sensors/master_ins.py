@@ -43,6 +43,7 @@ import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov
 from scipy.spatial.transform import Rotation
 
+from alignment_core.compiled import kernel
 from alignment_core.geometry import earth
 from alignment_core.geometry.rotations import rotate_rows
 from alignment_core.rng import stage_rng
@@ -222,16 +223,58 @@ class SchulerErrorModel:
     def step(self, t_ns: int) -> np.ndarray:
         """Error state at t_ns (the first call returns the initial state)."""
         if self.t_ns is not None:
-            dt_ns = t_ns - self.t_ns
-            d = self._cache.get(dt_ns)
-            if d is None:
-                phi, gam, qd = discretise(self.f, self.b, self.qc, dt_ns * 1e-9)
-                d = self._cache[dt_ns] = (phi, gam @ self.u, _sqrt_psd(qd))
+            d = self._over(t_ns - self.t_ns)
             self.x = d[0] @ self.x + d[1]
             if self.noisy:
                 self.x = self.x + d[2] @ self.rng.standard_normal(5)
         self.t_ns = t_ns
         return self.x.copy()
+
+    def step_many(self, t_ns: np.ndarray) -> np.ndarray:
+        """(K, 5) `step` at each of the stamps t_ns (K,) in turn: the same states bit for bit and
+        the same state and noise stream afterwards, each run of equal intervals in one compiled
+        loop (the same BLAS products; the noise drawn as one block, the same stream)."""
+        t = np.asarray(t_ns, dtype=np.int64)
+        out = np.empty((len(t), 5))
+        i = 0
+        if self.t_ns is None and len(t):
+            out[0] = self.x
+            self.t_ns, i = int(t[0]), 1
+        if i == len(t):
+            return out
+        dt = np.diff(t[i - 1:] if i else np.r_[self.t_ns, t])
+        ends = np.r_[np.flatnonzero(np.diff(dt)) + 1, len(dt)]
+        for a, b in zip(np.r_[0, ends[:-1]].tolist(), ends.tolist()):
+            d = self._over(int(dt[a]))
+            noise = self.rng.standard_normal((b - a, 5)) if self.noisy else _NO_NOISE
+            self.x = schuler_steps(d[0], d[1], d[2], self.x, noise, out[i + a:i + b])
+        self.t_ns = int(t[-1])
+        return out
+
+    def _over(self, dt_ns: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(Phi, Gamma u, Qd's square root) over dt_ns, made once per interval; Phi C-ordered (the
+        same BLAS product whether numpy or a kernel takes it)."""
+        d = self._cache.get(dt_ns)
+        if d is None:
+            phi, gam, qd = discretise(self.f, self.b, self.qc, dt_ns * 1e-9)
+            d = self._cache[dt_ns] = (np.ascontiguousarray(phi), gam @ self.u, np.ascontiguousarray(_sqrt_psd(qd)))
+        return d
+
+
+_NO_NOISE = np.zeros((0, 5))
+
+
+@kernel
+def schuler_steps(phi, gu, sq, x, noise, out):
+    """x <- Phi x + Gamma u (+ sq noise[k] when noise is given) for each row k of out (K, 5),
+    which takes the states; returns the last. numpy's products: the same BLAS calls."""
+    for k in range(out.shape[0]):
+        x = np.dot(phi, x) + gu
+        if noise.shape[0]:
+            x = x + np.dot(sq, noise[k])
+        for j in range(5):
+            out[k, j] = x[j]
+    return x
 
 
 class MasterInsModel:
@@ -278,7 +321,7 @@ class MasterInsModel:
             self.last_phi = np.broadcast_to(self.phi, (len(sb), 3)).copy()
             self.last_dv = np.zeros((len(sb), 3))
         else:
-            x = np.array([self.schuler.step(int(t)) for t in sb.t_ns]).reshape(len(sb), 5)
+            x = self.schuler.step_many(sb.t_ns)
             self.last_phi = x[:, :3]
             self.last_dv = np.c_[x[:, 3:], np.zeros(len(sb))]
             v_n = v_n + self.last_dv
