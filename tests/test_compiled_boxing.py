@@ -201,6 +201,10 @@ def test_numbas_pickler_rebuilds_numpys_own_float64_descriptor():
     assert swapped == f8.newbyteorder() and swapped != f8
     tagged = pickle.loads(dumps(np.dtype(np.float64, metadata={'unit': 'm'})))
     assert tagged is not f8 and tagged.metadata == {'unit': 'm'}
+    halves = np.dtype((np.float64, [('lo', '<i4'), ('hi', '<i4')]))      # equal to f8, with fields
+    assert pickle.loads(dumps(halves)).fields == halves.fields
+    copy = pickle.loads(pickle.dumps(f8))                                  # equal, another object
+    assert pickle.loads(dumps(copy)) == f8
     for d in (np.dtype(np.float32), np.dtype(np.int64), np.dtype([('a', 'f8')])):
         assert pickle.loads(dumps(d)) == d
     assert type(f8) not in copyreg.dispatch_table

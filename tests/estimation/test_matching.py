@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from alignment_core.estimation.matching import DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED, reference_velocities
@@ -40,3 +41,28 @@ def test_reference_velocities_are_the_rigid_body_velocity_of_the_spot():
         assert w_n.tobytes() == (c_m @ w_b).tobytes()                  # numpy's product, as the delay state had it
         for got, want in zip((c_m, r, u_n, v_ref, beam_n, w_n), reference_velocities.py_func(*args), strict=True):
             assert got.tobytes() == want.tobytes()
+
+
+@pytest.mark.filterwarnings('ignore::numba.core.errors.NumbaPerformanceWarning')   # the kernel copies the odd layouts
+def test_the_delay_states_nav_rate_is_numpys_product_whatever_the_layout():
+    """The delay state's C_m w_b: the reference kernel's (BLAS's gemv, as numpy's product of
+    contiguous operands) where numpy's product would be BLAS's, numpy's own otherwise (a reversed
+    or unaligned w_b, which numpy multiplies without BLAS): numpy's numbers in every layout."""
+    from alignment_core.estimation.config import FilterConfig
+    from alignment_core.estimation.matching import Matcher
+    from alignment_core.estimation.models import make_model
+    from alignment_core.estimation.outputs import Counters
+    from alignment_core.samples import MasterSample
+    cfg = FilterConfig(master_delay_state=True)
+    matcher = Matcher(cfg, make_model(cfg), 100.0, int(0.3e9), Counters())
+    rng = np.random.default_rng(9)
+    raw = np.empty(3 * 8 + 1, dtype=np.uint8)[1:].view(np.float64)        # unaligned
+    for k in range(300):
+        w = rng.normal(0.0, 0.05, 3)
+        raw[:] = w
+        for w_b in (w.copy(), w[::-1].copy()[::-1], np.r_[w, w][::2][:3], raw):
+            q = Rotation.random(random_state=rng).as_quat()
+            m = MasterSample(t_ns=10_000_000 * (k + 1), p_w=np.zeros(3), q_nb=q, v_b=rng.normal(0.0, 5.0, 3), w_b=w_b)
+            ref = matcher.reference(m, None, np.zeros(3))
+            w_n = matcher.extras(None, m.t_ns, m, ref)[0]
+            assert w_n.tobytes() == (ref.c_m @ w_b).tobytes()

@@ -95,6 +95,46 @@ def test_the_compiled_check_says_good_only_where_the_rules_do(compiled):
     assert fun(*_arrays(_full()), BOUND)
 
 
+def _answer(g: PublishGuard, e: Estimate, rules: bool) -> object:
+    try:
+        return g._good_by_rules(e) if rules else g.good(e)
+    except Exception as err:             # the rules' error is the view's too
+        return type(err)
+
+
+def _with_nan_x(**fields) -> Estimate:
+    x = np.full(15, 1e-6)
+    x[0] = math.nan
+    return _full(x=x, **fields)
+
+
+ODD = [  # (bound, estimate): what a review found the compiled check answered otherwise
+    (BOUND, _full(misalignment_sigma=np.full((3, 1), 1e-4))),            # the rules raise
+    (BOUND, _full(misalignment=np.full((3, 1), 1e-3))),
+    (BOUND, _with_nan_x(q_nb=Q0.reshape(4, 1))),                         # 2-D q: not compiled
+    (BOUND, _with_nan_x(misalignment=np.array(1e-3))),                   # 0-d
+    (2**53 + 3, _full(misalignment=np.array([2.0**53 + 4, 0.0, 0.0]))),  # an int bound, exact in Python
+    (10**20, _full()), (-10**20, _full()), (np.float16(0.5), _full()), (np.float32(0.5), _full()),
+]
+
+
+@pytest.mark.parametrize('k', range(len(ODD)))
+def test_odd_estimates_and_bounds_get_the_rules_answer(k):
+    bound, e = ODD[k]
+    g = PublishGuard(bound)
+    assert _answer(g, e, rules=False) == _answer(g, e, rules=True)
+
+
+def test_a_quaternion_whose_square_underflows_is_left_to_numpy():
+    """Under np.errstate(under='raise') the rules' q . q raises on a 1e-200 component; so does the
+    view (the compiled check declines it)."""
+    e = _full(q_nb=np.array([1e-200, 0.0, 0.0, 1.0]))
+    g = PublishGuard(BOUND)
+    assert g.good(e)
+    with np.errstate(under='raise'):
+        assert _answer(g, e, rules=False) is _answer(g, e, rules=True) is FloatingPointError
+
+
 def test_the_rules_raise_on_an_empty_misalignment_and_so_does_the_view():
     e = _full(misalignment=np.zeros(0))
     assert not surely_good(*_arrays(e), BOUND)

@@ -63,3 +63,32 @@ def test_non_finite_odometry_is_a_breakdown_and_nothing_is_kept(bad):
     with np.errstate(invalid='ignore', over='ignore'):
         assert maker.keep(live, res) is None
     assert maker.held is None and maker.held_state is None
+
+
+def test_a_negative_variance_is_numpys_to_judge_warning_and_all():
+    """keep takes P's attitude block and sqrt(diag P) in one compiled call; a covariance it finds
+    not finite goes through numpy's lines again, so a negative variance warns (or raises under
+    np.errstate) as numpy's square root does, and nothing is kept."""
+    maker, live, res = _setup()
+    p = live.kf.P.copy()
+    p[7, 7] = -1.0
+    live.kf.P = p
+    with pytest.warns(RuntimeWarning, match='invalid value'):
+        assert maker.keep(live, res) is None
+    with np.errstate(invalid='raise'), pytest.raises(FloatingPointError):
+        maker.keep(live, res)
+    assert maker.held is None
+
+
+@pytest.mark.parametrize('shape', [(0, 2), (2, 2), (0, -2)], ids=['wider', 'larger', 'narrower'])
+def test_a_covariance_of_another_shape_is_read_by_numpy(shape):
+    """A P that is not the model's n x n (a filter handed a wrong one) is never read by the
+    compiled call (which does not check bounds): numpy's lines read it as before, sigma the
+    root of its diagonal, however long."""
+    maker, live, res = _setup()
+    n = live.kf.P.shape[0]
+    odd = np.eye(n + shape[0], n + shape[1]) * 1e-4
+    live.kf.P = odd
+    odo = maker.keep(live, res)
+    assert odo is not None and maker.held is not None
+    assert maker.held[1].tobytes() == np.sqrt(np.diag(odd)).tobytes()

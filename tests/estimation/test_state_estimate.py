@@ -4,6 +4,9 @@ in a run, the delay state finds the master's true latency and the biases are the
 accumulated corrections."""
 from __future__ import annotations
 
+import math
+import warnings
+
 import numpy as np
 import pytest
 
@@ -50,6 +53,53 @@ def test_the_values_are_numpys_sums(dtype):
         want[i] += getattr(corr, name)[axis]
     got = s.values(x, corr)
     assert got.dtype == np.float64 and got.tobytes() == want.tobytes()
+
+
+def _numpys(s: StateEstimate, x, corr: Corrections) -> np.ndarray:
+    """values() as numpy's element sums give it (the code before its Python floats)."""
+    want = np.array(x, dtype=float)
+    for i, name, axis in s._fed:
+        want[i] += getattr(corr, name)[axis]
+    return want
+
+
+def test_non_finite_sums_are_numpys_own_nan_warning_and_all():
+    """A sum that is not finite is numpy's: which NaN (NaN + NaN keeps one operand's sign and
+    payload, Python's float and numpy's scalar add pick differently), and its overflow warning."""
+    m = make_model(FilterConfig(lever_arm_states=True))
+    s = StateEstimate(m.labels)
+    neg_nan = -math.nan                                     # the hardware's NaN: sign set
+    x = np.zeros(m.n)
+    x[6], x[9], x[10], x[15] = neg_nan, np.inf, 1e308, math.nan
+    corr = Corrections(bg=np.array([math.nan, 0.0, 0.0]), ba=np.array([-np.inf, 1e308, 0.0]),
+                       dr=np.array([neg_nan, 0.0, 0.0]))
+    with warnings.catch_warnings(record=True) as before:
+        warnings.simplefilter('always')
+        want = _numpys(s, x, corr)
+    with warnings.catch_warnings(record=True) as now:
+        warnings.simplefilter('always')
+        got = s.values(x, corr)
+    assert got.tobytes() == want.tobytes()
+    said = sorted(str(w.message) for w in now)
+    assert said == sorted(str(w.message) for w in before) and any('overflow' in m for m in said)
+    with np.errstate(over='raise', invalid='ignore'), pytest.raises(FloatingPointError):
+        s.values(x, corr)
+
+
+def test_other_inputs_are_summed_by_numpy_as_before():
+    """A 2-D state, corrections in long double or as lists: numpy's element sums, as before; a
+    correction that is not numeric raises as before."""
+    m = make_model(FilterConfig(lever_arm_states=True))
+    s = StateEstimate(m.labels)
+    rng = np.random.default_rng(8)
+    x2 = rng.standard_normal((m.n, 1))
+    ld = Corrections(bg=rng.standard_normal(3).astype(np.longdouble) / 3, ba=np.zeros(3), dr=np.zeros(3))
+    lists = Corrections(bg=[0.1, 0.2, 0.3], ba=[0.0, 1.0, 2.0], dr=[3.0, 4.0, 5.0])
+    for x, corr in ((x2, Corrections()), (x2[:, 0], ld), (x2[:, 0], lists)):
+        got, want = s.values(x, corr), _numpys(s, x, corr)
+        assert got.shape == want.shape and got.tobytes() == want.tobytes()
+    with pytest.raises(TypeError):
+        s.values(x2[:, 0], Corrections(bg=np.array(['1', '2', '3'])))
 
 
 def test_fed_back_states_add_their_correction_the_others_do_not():

@@ -19,8 +19,9 @@ The dtype a returned array carries is an environment constant too, and the envir
 pickled into the disk cache. numpy's reduce of a dtype rebuilds it as a copy, so an array returned
 by a kernel loaded from the cache had a float64 descriptor equal to numpy's but another object,
 and as_float64's identity test (compiled.py) fell through to the equality test on every kernel
-operand that such an array became. Pickled by numba's pickler (its cache, nothing else), numpy's
-native float64 descriptor is rebuilt as numpy's own (`_reduce_dtype`).
+operand that such an array became. Pickled by numba's copy of cloudpickle (its cache, and
+whatever else numba pickles with it; the standard pickler and the cloudpickle package are left as
+they are), numpy's own float64 descriptor is rebuilt as itself (`_reduce_dtype`).
 
 It is installed only under the numba it was written against (`NUMBA_VERSION`, the version
 requirements.txt pins) and only over numba's own boxer; any other numba keeps its own."""
@@ -53,9 +54,10 @@ def install() -> bool:
 
 
 def _reduce_dtype(d: Any) -> Any:
-    """numpy's native float64 descriptor as np.dtype('f8') (numpy's own object when unpickled);
-    any other descriptor of its class (byte-swapped, with metadata) as numpy reduces it."""
-    if d is _FLOAT64 or (d == _FLOAT64 and d.metadata is None):
+    """numpy's own float64 descriptor object (what numba keeps for a float64 array it returns) as
+    np.dtype('f8'), numpy's own object again when unpickled; any other descriptor of its class,
+    equal to it or not (a copy, byte-swapped, with metadata or fields), as numpy reduces it."""
+    if d is _FLOAT64:
         return np.dtype, ('f8',)
     return d.__reduce__()
 

@@ -63,7 +63,7 @@ class Reference(NamedTuple):
     v_ref: np.ndarray        # (3,) master velocity + u_n
     moving: bool             # the LDV at the validity time says the aircraft moves
     beam_n: np.ndarray | None = None   # (3,) a beam LDV's unit line of sight, nav frame (models/beam.py)
-    w_n: np.ndarray | None = None      # (3,) the master's body rate in nav axes, C_m w_b (None: not made)
+    w_n: np.ndarray | None = None      # (3,) the master's body rate in nav axes, C_m w_b (BLAS's; None: not made)
 
 
 @dataclass
@@ -201,7 +201,9 @@ class Matcher:
         airframe's own motion on its gear, and two master samples 20 ms apart their velocity noise
         times 70 per m/s (both errors in the regressor pull the delay toward zero)."""
         c_m, r, v_rel = ref.c_m, ref.r, ref.v_rel
-        w_n = c_m @ m.w_b if ref.w_n is None else ref.w_n
+        w_m = m.w_b             # the kernel's product is numpy's where numpy's would be BLAS's
+        w_n = ref.w_n if ref.w_n is not None and type(w_m) is np.ndarray and w_m.flags.c_contiguous \
+            and w_m.flags.aligned else c_m @ w_m
         prev, self._prev_master = self._prev_master, (t_v, c_m, m.v_b, m.w_b)
         iv = None
         for item in reversed(self._intervals):

@@ -100,6 +100,7 @@ class EstimateMaker:
     def __init__(self, model: ErrorModel, odometry: OdometryMaker) -> None:
         self._model = model
         self._odometry = odometry
+        self._p_shape = (model.n, model.n)          # covariance_parts' P
         self.state = StateEstimate(model.labels)
         self.held_state: np.ndarray | None = None      # the accumulated estimate at the last keep
         self.held: tuple[np.ndarray, np.ndarray, dict, np.ndarray, np.ndarray] | None = None
@@ -111,14 +112,15 @@ class EstimateMaker:
         a non-finite output is a breakdown (docs/engine.md), never an output at OK."""
         p = live.kf.P
         mu, mu_sigma = res.mu, res.mu_sigma
-        if type(p) is _NDARRAY and p.dtype.char in 'fd' and _is_vector(mu) and _is_vector(mu_sigma):
+        ok = False
+        if type(p) is _NDARRAY and p.dtype.char in 'fd' and p.shape == self._p_shape and _is_vector(mu) \
+                and _is_vector(mu_sigma):
             cov, sigma, ok = covariance_parts(p, self._odometry.attitude_states, mu, mu_sigma)
-        else:
+        if not ok:                  # numpy's lines decide (and warn, or raise under np.errstate, as they do)
             att = self._model.attitude
             cov, sigma = p[att, att].copy(), np.sqrt(np.diag(p))
-            ok = finite(cov, sigma) and finite(mu, mu_sigma)
-        if not ok:
-            return None
+            if not (finite(cov, sigma) and finite(mu, mu_sigma)):
+                return None
         odo = self._odometry.make_finite(live.ins.s, p, live.gyro, res.corr.bg)
         if odo is None:
             return None
@@ -171,11 +173,14 @@ class PublishGuard:
 
     def good(self, e: Estimate) -> bool:
         """Finite, a unit attitude quaternion, the misalignment and its sigma within the bound; an
-        estimate of float64 arrays is first offered to one compiled check that says yes only where
-        these rules surely do (`surely_good`)."""
+        estimate of float64 arrays (the misalignment, its sigma and the quaternion vectors) under a
+        float bound is first offered to one compiled check that says yes only where these rules
+        surely do (`surely_good`)."""
         arrays = (e.misalignment, e.misalignment_sigma, e.q_nb, e.attitude_cov, e.x, e.sigma, e.p_w, e.v_b, e.w_b,
                   e.pose_cov, e.twist_cov, e.state)
-        if all(type(a) is _NDARRAY and a.dtype == FLOAT64 for a in arrays) and \
+        if type(self.max_misalignment) is float and all(
+                type(a) is _NDARRAY and a.dtype == FLOAT64 and a.ndim >= 1 for a in arrays) and \
+                arrays[0].ndim == arrays[1].ndim == arrays[2].ndim == 1 and \
                 surely_good(*arrays, self.max_misalignment):
             return True
         return self._good_by_rules(e)
@@ -265,6 +270,8 @@ def surely_good(mu, mu_sigma, q, att_cov, x, sigma, p_w, v_b, w_b, pose, twist, 
         return False
     qq = 0.0
     for v in q:
+        if v != 0.0 and abs(v) < 1e-150:        # its square underflows: numpy's product may raise (errstate)
+            return False
         qq += v * v
     if not abs(qq - 1.0) <= 1e-6 - 1e-12:
         return False

@@ -13,6 +13,9 @@ import numpy as np
 
 from alignment_core.estimation.models.base import Corrections
 
+_NDARRAY = np.ndarray
+_INF = float('inf')
+
 # model label prefix -> (published name, unit suffix, the correction it accumulates into, if any)
 _KINDS: dict[str, tuple[str, str, str | None]] = {
     'phi': ('attitude_error', 'rad', None),
@@ -54,14 +57,21 @@ class StateEstimate:
             if corr is not None:
                 self._fed.append((i, corr, _AXES[axis]))
         self.labels = tuple(names)
+        self._names = tuple(dict.fromkeys(name for _, name, _ in self._fed))
 
     def values(self, x: np.ndarray, corr: Corrections) -> np.ndarray:
         """(n,) the accumulated estimate: the filter's state x (after feedback) plus the corrections."""
-        out = np.array(x, dtype=float).tolist()        # Python floats: numpy's sums, a third of its time
-        fed: dict[str, list[float]] = {}
+        out = np.array(x, dtype=float)
+        fed = {name: getattr(corr, name) for name in self._names}
+        if out.ndim != 1 or not all(type(c) is _NDARRAY and c.dtype.char in 'fd' for c in fed.values()):
+            for i, name, axis in self._fed:
+                out[i] += fed[name][axis]
+            return out
+        sums = out.tolist()                 # Python floats: numpy's sums, a third of its time
+        cells = {name: c.tolist() for name, c in fed.items()}
         for i, name, axis in self._fed:
-            c = fed.get(name)
-            if c is None:
-                c = fed[name] = np.asarray(getattr(corr, name), dtype=float).tolist()
-            out[i] += c[axis]
-        return np.array(out)
+            v = sums[i] + cells[name][axis]
+            if not -_INF < v < _INF:        # numpy's own sum: its NaN, and its warning (or error) on overflow
+                v = float(out[i] + fed[name][axis])
+            sums[i] = v
+        return np.array(sums)
