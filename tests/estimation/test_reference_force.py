@@ -228,3 +228,43 @@ def test_a_master_sample_not_after_the_newest_is_ignored():
     acc.add(20_000_000 * 60, c_m, np.array([6.0 + 5.0, 0.0, 0.0]), np.zeros(3), np.array([1.0, 2.0, 3.0]))
     after = acc.acceleration()
     assert after is not None and after[0] > before[0]
+
+
+def test_the_fit_made_as_each_sample_enters_is_the_fit_of_its_window_made_afresh():
+    """The fit is made when a sample enters, its rows kept while the arm stays: after every
+    sample of a long run (the arm still for a while, then moving, repeated stamps, a gap, the
+    buffer compacted and grown), bit for bit the slope of the window's samples with the newest
+    arm, rows and fit made afresh (spot_slope on new arrays); None until the window fills."""
+    rng = np.random.default_rng(11)
+    window_ns = 1_000_000_000
+    acc = SpotAcceleration(window_ns * 1e-9)
+    kept: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = []
+    t, checked = 0, 0
+    r = np.array([40.0, -10.0, 15.0])
+    for k in range(700):
+        if k == 350:
+            acc.clear()
+            kept.clear()
+        t_k = t if k % 97 == 5 else t + int(rng.integers(15_000_000, 25_000_000))   # a repeated stamp: ignored
+        if k > 200 and k % 3:
+            r = r + rng.normal(0.0, 0.01, 3)
+        c_m = Rotation.from_rotvec(rng.normal(0.0, 0.05, 3)).as_matrix()
+        v_b, w_b = rng.normal(0.0, 1.0, 3), rng.normal(0.0, 0.02, 3)
+        acc.add(t_k, c_m, v_b, w_b, r)
+        if not kept or t_k > kept[-1][0]:
+            kept.append((t_k, c_m, v_b, w_b))
+            arm = r
+        t = max(t, t_k)
+        window = [s for s in kept if kept[-1][0] - s[0] <= window_ns]
+        got = acc.acceleration()
+        if len(window) < 4 or window[-1][0] - window[0][0] < 0.8 * window_ns:
+            assert got is None
+            continue
+        n = len(window)
+        ts = np.array([s[0] for s in window], dtype=np.int64)
+        cs = np.array([s[1] for s in window])
+        vw = np.array([[s[2], s[3]] for s in window])
+        want = spot_slope(ts, cs, vw, np.zeros((n, 3)), arm, 0, 0, n)
+        assert got is not None and got.tobytes() == want.tobytes()
+        checked += 1
+    assert checked > 500

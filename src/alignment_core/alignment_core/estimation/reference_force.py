@@ -68,31 +68,28 @@ class SpotAcceleration:
 
     def add(self, t_ns: int, c_m: np.ndarray, v_b: np.ndarray, w_b: np.ndarray, r: np.ndarray) -> None:
         """One master sample valid at t_ns (increasing times; an older or equal one is ignored):
-        attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m."""
+        attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m.
+        The fit is made at once, in the same call (its readers, the IMU steps while parked and
+        the delay state, read it after nearly every master sample)."""
         if self._end == len(self._t):
             self._make_room()
-        start = append_sample(self._t, self._c, self._vw, self._start, self._end, t_ns, as_float64(c_m),
-                              as_float64(v_b), as_float64(w_b), self._window_ns)
+        r = np.asarray(r, dtype=float)
+        arm = r.tobytes()
+        moved = arm != self._rows_r                  # each row depends on the newest arm: recomputed when it moves
+        start, fitted, value = append_and_fit(
+            self._t, self._c, self._vw, self._rows, r, -1 if moved else self._rows_end, self._start, self._end, t_ns,
+            as_float64(c_m), as_float64(v_b), as_float64(w_b), self._window_ns, MIN_FILL * self._window_ns)
         if start < 0:
             return
         self._start, self._end = start, self._end + 1
-        self._r = np.asarray(r, dtype=float)
-        self._value = None
+        self._r = r
+        self._value = value if fitted else None
+        if fitted:
+            self._rows_r, self._rows_end = arm, self._end
 
     def acceleration(self) -> np.ndarray | None:
         """d v / dt (3,) at the newest sample, or None while the samples span less than MIN_FILL
         of the window (or are fewer than four)."""
-        if self._value is not None:
-            return self._value
-        s, e = self._start, self._end
-        if e - s < 4 or int(self._t[e - 1]) - int(self._t[s]) < MIN_FILL * self._window_ns:
-            return None
-        r = self._r
-        if r.tobytes() != self._rows_r:             # each row depends on the newest arm: recomputed when it moves
-            self._rows_r = r.tobytes()
-            self._rows_end = s
-        self._value = spot_slope(self._t, self._c, self._vw, self._rows, r, max(self._rows_end, s), s, e)
-        self._rows_end = e
         return self._value
 
 
@@ -113,6 +110,21 @@ def append_sample(t, c, vw, start, end, t_ns, c_m, v_b, w_b, window_ns):
     while t_ns - t[start] > window_ns:
         start += 1
     return start
+
+
+@kernel
+def append_and_fit(t, c, vw, rows, r, rows_end, start, end, t_ns, c_m, v_b, w_b, window_ns, min_span_ns):
+    """append_sample of a master sample, then, once the window's samples are four or more and
+    span min_span_ns, spot_slope over it with the rows from rows_end on made anew (from its first
+    row when rows_end is -1: the arm moved). Returns (the window's first row, or -1 when nothing
+    was appended; whether it was fitted; the slope (3,), empty when not)."""
+    s = append_sample(t, c, vw, start, end, t_ns, c_m, v_b, w_b, window_ns)
+    if s < 0:
+        return s, False, np.empty(0)
+    e = end + 1
+    if e - s < 4 or t[e - 1] - t[s] < min_span_ns:
+        return s, False, np.empty(0)
+    return s, True, spot_slope(t, c, vw, rows, r, s if rows_end < 0 else max(rows_end, s), s, e)
 
 
 @kernel
