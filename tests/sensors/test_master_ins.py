@@ -201,6 +201,22 @@ def test_schuler_steps_in_blocks_equal_steps_one_by_one(arw):
     assert many.rng.standard_normal(3).tobytes() == one.rng.standard_normal(3).tobytes()
 
 
+def test_schuler_steps_in_blocks_stop_where_steps_one_by_one_stop():
+    """An interval the discretisation cannot take (years: expm overflows) raises in both, and
+    leaves the state and its time where stepping one stamp at a time left them."""
+    cfg = MasterConfig(model='schuler')
+    u = np.zeros(5)
+    one, many = (SchulerErrorModel(cfg, 0.6, u, stage_rng(7, 'test')) for _ in range(2))
+    t = np.array([0, 20_000_000, 40_000_000, 40_000_000 + 10**17])
+    with np.errstate(over='ignore', invalid='ignore'):          # expm on the way to its failure
+        with pytest.raises(np.linalg.LinAlgError):
+            for k in t:
+                one.step(int(k))
+        with pytest.raises(np.linalg.LinAlgError):
+            many.step_many(t)
+    assert many.t_ns == one.t_ns == 40_000_000 and many.x.tobytes() == one.x.tobytes()
+
+
 def test_default_master_is_todays_constant_model():
     sc = scenario.load('catapult_paper', {'duration_s': 1.0})
     assert sc.master.model == 'constant' and sc.master.rate_hz == 0.0 and sc.master.latency_s == 0.0

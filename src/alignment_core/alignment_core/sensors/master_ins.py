@@ -248,7 +248,7 @@ class SchulerErrorModel:
             d = self._over(int(dt[a]))
             noise = self.rng.standard_normal((b - a, 5)) if self.noisy else _NO_NOISE
             self.x = schuler_steps(d[0], d[1], d[2], self.x, noise, out[i + a:i + b])
-        self.t_ns = int(t[-1])
+            self.t_ns = int(t[i + b - 1])          # where step would be if the next run's interval fails
         return out
 
     def _over(self, dt_ns: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
