@@ -211,7 +211,6 @@ def test_numbas_pickler_rebuilds_numpys_own_float64_descriptor():
 
 
 CACHED_KERNEL = '''
-import sys
 import numpy as np
 from alignment_core.compiled import FLOAT64, kernel
 

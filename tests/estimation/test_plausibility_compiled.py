@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from alignment_core.compiled import is_float64_vector as vector
 from alignment_core.estimation import plausibility as pl
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.samples import ImuSample, LdvSample, MasterSample
@@ -117,12 +118,12 @@ def test_the_accepts_say_yes_only_where_the_rules_pass_the_sample_as_given(compi
 def _accepted(imu, master, norm, beam) -> int:
     yes = 0
     for s in _imu_samples():
-        if pl._vector(s.gyro) and pl._vector(s.accel) and imu(s.gyro, s.accel, LIM.gyro_max, LIM.accel_max):
+        if vector(s.gyro) and vector(s.accel) and imu(s.gyro, s.accel, LIM.gyro_max, LIM.accel_max):
             yes += 1
             assert pl.imu_rules(s, LIM) == ''
     for m in _master_samples():
         arrays = (m.p_w, m.q_nb, m.v_b, m.w_b)
-        if all(pl._vector(a) for a in arrays) and master(*arrays, LIM.quaternion_tol, LIM.master_speed,
+        if all(vector(a) for a in arrays) and master(*arrays, LIM.quaternion_tol, LIM.master_speed,
                                                           LIM.master_rate, LIM.position):
             yes += 1
             assert pl.master_rules(m, LIM) == (m, '')
@@ -132,7 +133,7 @@ def _accepted(imu, master, norm, beam) -> int:
             assert math.hypot(*v.tolist()) <= LIM.ldv_speed
     beam_lim = pl.Limits.of(FilterConfig(ldv_mode='beam'))
     for s in _ldv_samples():
-        if s.beam is not None and pl._vector(s.v_s) and pl._vector(s.beam) and beam(s.v_s, s.beam, LIM.ldv_speed):
+        if s.beam is not None and vector(s.v_s) and vector(s.beam) and beam(s.v_s, s.beam, LIM.ldv_speed):
             yes += 1
             assert pl.ldv_rules(s, beam_lim) == ''
     return yes

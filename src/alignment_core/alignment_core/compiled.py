@@ -95,6 +95,11 @@ float64 is not equal and is converted)."""
 _NDARRAY = np.ndarray
 
 
+def is_float64_vector(a: Any) -> bool:
+    """a is a 1-D float64 numpy array: the operand a compiled check takes as it is."""
+    return type(a) is _NDARRAY and (a.dtype is FLOAT64 or a.dtype == FLOAT64) and a.ndim == 1
+
+
 def as_float64(a: Any) -> np.ndarray:
     """a as a float64 numpy array for a kernel (no copy when it is one already)."""
     return a if type(a) is _NDARRAY and (a.dtype is FLOAT64 or a.dtype == FLOAT64) else np.asarray(a, dtype=np.float64)

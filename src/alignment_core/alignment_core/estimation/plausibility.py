@@ -15,9 +15,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
-from alignment_core.compiled import FLOAT64, kernel
+from alignment_core.compiled import is_float64_vector, kernel
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.health import finite
 from alignment_core.estimation.outputs import Counters
@@ -31,7 +29,6 @@ NORM_MARGIN = 1e-9         # the compiled accept's relative margin on a norm aga
 UNIT_MARGIN = 1e-14        # ... and on a unit quaternion's or beam's norm (hypot and a plain sqrt differ by ulps)
 BEAM_UNIT_TOLERANCE = 1e-6  # a beam's line of sight is a unit vector to this
 NORM_RANGE = (1e-150, 1e150)  # limits the compiled norm test takes (squares normal, none overflowing)
-_NDARRAY = np.ndarray
 
 
 @dataclass(frozen=True)
@@ -72,15 +69,10 @@ def _max_abs(a: Any) -> float:
     return max(abs(x), abs(y), abs(z))
 
 
-def _vector(a: Any) -> bool:
-    """a is a 1-D float64 array: what the compiled accepts take (anything else goes by the rules)."""
-    return type(a) is _NDARRAY and (a.dtype is FLOAT64 or a.dtype == FLOAT64) and a.ndim == 1
-
-
 def imu_reason(s: ImuSample, lim: Limits) -> str:
     """'' if plausible, else why not: a rate or specific force beyond the IMU's full scale."""
     g, a = s.gyro, s.accel
-    if _vector(g) and _vector(a) and imu_plausible(g, a, lim.gyro_max, lim.accel_max):
+    if is_float64_vector(g) and is_float64_vector(a) and imu_plausible(g, a, lim.gyro_max, lim.accel_max):
         return ''
     return imu_rules(s, lim)
 
@@ -97,8 +89,9 @@ def imu_rules(s: ImuSample, lim: Limits) -> str:
 def master_check(s: MasterSample, lim: Limits) -> tuple[MasterSample | None, str]:
     """(the sample, '') if plausible, its quaternion normalised when it is off unit norm by more
     than rounding (and by no more than the tolerance), else (None, why not)."""
-    if _vector(s.p_w) and _vector(s.q_nb) and _vector(s.v_b) and _vector(s.w_b) and master_plausible(
-            s.p_w, s.q_nb, s.v_b, s.w_b, lim.quaternion_tol, lim.master_speed, lim.master_rate, lim.position):
+    if is_float64_vector(s.p_w) and is_float64_vector(s.q_nb) and is_float64_vector(s.v_b) \
+            and is_float64_vector(s.w_b) and master_plausible(
+                s.p_w, s.q_nb, s.v_b, s.w_b, lim.quaternion_tol, lim.master_speed, lim.master_rate, lim.position):
         return s, ''
     return master_rules(s, lim)
 
@@ -120,9 +113,9 @@ def master_rules(s: MasterSample, lim: Limits) -> tuple[MasterSample | None, str
 def ldv_reason(s: LdvSample, lim: Limits) -> str:
     """A valid LDV sample must be finite and slower than the deck run allows, and of the LDV's
     kind (filter.ldv_mode): a beam sample carries a unit line of sight, a vector one none."""
-    if s.valid and (s.beam is not None) == lim.ldv_beam and _vector(s.v_s) and (
+    if s.valid and (s.beam is not None) == lim.ldv_beam and is_float64_vector(s.v_s) and (
             norm_within(s.v_s, 3, lim.ldv_speed) if s.beam is None
-            else _vector(s.beam) and beam_plausible(s.v_s, s.beam, lim.ldv_speed)):
+            else is_float64_vector(s.beam) and beam_plausible(s.v_s, s.beam, lim.ldv_speed)):
         return ''
     return ldv_rules(s, lim)
 

@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from alignment_core.compiled import FLOAT64, as_float, as_float64, kernel
+from alignment_core.compiled import FLOAT64, as_float, as_float64, is_float64_vector, kernel
 from alignment_core.estimation.health import ERROR, OK, all_finite, finite
 from alignment_core.estimation.matching import LiveSolution, MatchResults
 from alignment_core.estimation.models import ErrorModel
@@ -113,8 +113,8 @@ class EstimateMaker:
         p = live.kf.P
         mu, mu_sigma = res.mu, res.mu_sigma
         ok = False
-        if type(p) is _NDARRAY and p.dtype.char in 'fd' and p.shape == self._p_shape and _is_vector(mu) \
-                and _is_vector(mu_sigma):
+        if type(p) is _NDARRAY and p.dtype.char in 'fd' and p.shape == self._p_shape and is_float64_vector(mu) \
+                and is_float64_vector(mu_sigma):
             cov, sigma, ok = covariance_parts(p, self._odometry.attitude_states, mu, mu_sigma)
         if not ok:                  # numpy's lines decide (and warn, or raise under np.errstate, as they do)
             att = self._model.attitude
@@ -223,11 +223,6 @@ def prior_estimate(e: Estimate, mu_sigma: np.ndarray, p0: np.ndarray, att: slice
         e, misalignment=np.zeros(3), misalignment_sigma=mu_sigma.copy(), q_nb=q, attitude_cov=p0[att, att].copy(),
         x=np.zeros(len(e.x)), sigma=np.sqrt(np.diag(p0)), bias_gyro=np.zeros(3), bias_accel=np.zeros(3),
         nis=math.nan, p_w=None, v_b=None, w_b=None, pose_cov=None, twist_cov=None, state=np.zeros(len(e.x)))
-
-
-def _is_vector(a: object) -> bool:
-    """a a float64 numpy vector (covariance_parts' misalignment operands)."""
-    return type(a) is _NDARRAY and a.dtype == FLOAT64 and a.ndim == 1
 
 
 @kernel
