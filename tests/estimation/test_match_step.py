@@ -27,8 +27,10 @@ from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.models.lever_arm import LeverArmStates
 from alignment_core.estimation.models.master_delay import MasterDelayState
 from alignment_core.estimation.models.velocity_matching import VelocityMatching
+from alignment_core.navigation.history import SlaveHistory, SlaveSnapshot
 from alignment_core.navigation.strapdown import NavState
 
+MS = 1_000_000
 C_NOM = np.array([[0.8, 0.6, 0.0], [-0.6, 0.8, 0.0], [0.0, 0.0, 1.0]])
 MODELS = {  # name: FilterConfig options
     'vm15': {}, 'vm12': {'model': 'vm12'},
@@ -83,7 +85,8 @@ def _calls(model, kf, match, nav, corr, gate, beam_n=None, past=None):
     x_kept = model.feedback(x, p, match, nav, corr)
     at = nav
     if past is not None:
-        live = SimpleNamespace(ins=SimpleNamespace(s=nav), history=SimpleNamespace(items=[], correct=lambda *a: None))
+        history = SimpleNamespace(items=[], correct=lambda *a, **k: None)
+        live = SimpleNamespace(ins=SimpleNamespace(s=nav), history=history)
         at = matching.Matcher._carry(SimpleNamespace(_lowpass=None), live, q0, v0, pos0, past[0])
     return upd, (x_before, x_kept) + model.misalignment(x_kept, p, match, at, corr) + (at.q_nb,)
 
@@ -231,10 +234,106 @@ def test_the_kernels_compiled_are_the_kernels_interpreted(model_name):
                 match.w_m, match.a_n, beam, past[1])
         outs.append(run(x, p, y, s, match.z_vel, match.u_n, match.r_vel, np.inf, layers.nb, layers.delay,
                         layers.lever, match.c_m, C_NOM, match.w_m, match.a_n, match.w_n, beam, past[1], nav.q_nb,
-                        nav.v_n, corr.bg, corr.ba, corr.dr, past[0].q_nb) + (x, p, y, s) + measure(*args))
-    assert len(outs[0]) == len(outs[1]) == 20
+                        nav.v_n, corr.bg, corr.ba, corr.dr, past[0].q_nb, past[0].v_n, 0.3)
+                    + (x, p, y, s) + measure(*args))
+    assert len(outs[0]) == len(outs[1]) == 22
     for a, b in zip(*outs):
         assert _same(a, b)
+
+
+def _history(rng: np.random.Generator, n: int, t_live: int) -> tuple[SlaveHistory, SlaveSnapshot]:
+    """A slave history of three stored solutions 10 ms apart, the last (returned) 10 ms before the
+    live one's time, each with its step's transition."""
+    hist = SlaveHistory(100 * MS)
+    for k in range(3):
+        snap = hist.record(t_live - (3 - k) * 10 * MS, _nav(rng))
+        snap.phi = np.eye(n) + rng.normal(size=(n, n)) * 1e-3
+    return hist, hist.items[-1]
+
+
+@pytest.mark.parametrize('model_name', list(MODELS))
+@pytest.mark.parametrize('beam', [False, True])
+@pytest.mark.parametrize('gate', [None, 1e-9, 2.0])
+def test_a_match_inside_the_last_step_is_the_solution_made_first(model_name, beam, gate):
+    """A validity time inside the slave's last step, interpolated by the kernel (update_and_feed_back's
+    step) against the solution there made first (history.Past.state) and matched with its
+    attitude and Phi: the update, the filter, the fed-back solution and corrections, the
+    misalignment, the attitude at the validity time, and the stored solutions after the carry
+    (SlaveHistory.correct, the kernel's carry of the last one taken), bit for bit."""
+    model = make_model(FilterConfig(**MODELS[model_name]))
+    layers = layers_of(model)
+    assert layers is not None
+    t_live = 1_000 * MS
+    outcomes = set()
+    for seed in range(12):
+        got = []
+        for kernel_steps in (False, True):
+            rng = np.random.default_rng(seed)
+            nav, corr, kf, match = _case(rng, model.n, extras=seed % 3, c_nom=seed % 4 != 3)
+            hist, last = _history(rng, model.n, t_live)
+            beam_n = rng.normal(size=3) if beam else None
+            if beam_n is not None:
+                beam_n /= np.linalg.norm(beam_n)
+            t_v = t_live - int(rng.integers(1, 10 * MS))
+            past = hist.find(t_v, nav, t_live, 20 * MS)
+            assert past is not None and past.into_live() is last
+            at, phi_acc = past.state()
+            match.v_ref = at.v_n - match.z_vel * (0.1 + 0.4 * seed)      # innovations small to large
+            q0, v0 = nav.q_nb, nav.v_n
+            common = (kf, layers)
+            tail = (match.u_n, match.r_vel, gate, nav, corr, match.c_m, match.c_nom, match.w_m, match.a_n,
+                    match.w_n, beam_n)
+            if kernel_steps:
+                upd, fed = update_and_feed_back(*common, match.v_ref, *tail, step=(last, past.f))
+            else:
+                upd, fed = update_and_feed_back(*common, at.v_n - match.v_ref, *tail, q_past=at.q_nb,
+                                                phi_acc=phi_acc)
+            if fed is not None:
+                assert (fed.carried is not None) == kernel_steps
+                hist.correct(q0, nav.q_nb, v0, nav.v_n, 0.0, 0.0, 0.0, carried=fed.carried)
+            stored = [(s.q_nb, s.v_n, s.lat) for s in hist.items]
+            got.append((upd, None if fed is None else fed[:5], kf, nav, corr, stored))
+        (upd_a, fed_a, kf_a, nav_a, corr_a, stored_a), (upd_b, fed_b, kf_b, nav_b, corr_b, stored_b) = got
+        for f in ('innovation', 's', 'nis', 'accepted'):
+            assert _same(getattr(upd_b, f), getattr(upd_a, f)), f
+        assert (fed_a is None) == (fed_b is None)
+        outcomes.add(fed_a is None)
+        if fed_a is not None:
+            for g, w in zip(fed_b, fed_a):
+                assert _same(g, w)
+        assert _same(kf_b.x, kf_a.x) and _same(kf_b.P, kf_a.P) and kf_b.diagnostics() == kf_a.diagnostics()
+        for f in dataclasses.fields(NavState):
+            assert _same(getattr(nav_b, f.name), getattr(nav_a, f.name)), f.name
+        for f in dataclasses.fields(Corrections):
+            assert _same(getattr(corr_b, f.name), getattr(corr_a, f.name)), f.name
+        for sb, sa in zip(stored_b, stored_a, strict=True):
+            for g, w in zip(sb, sa):
+                assert _same(g, w)
+    assert outcomes == ({True} if gate == 1e-9 else {False} if gate is None else {True, False})
+
+
+def test_only_a_time_inside_the_last_step_goes_to_the_kernel_as_a_step():
+    """Past.into_live: the stored solution a time inside the step into the live one starts from;
+    not a stored solution's own time, a time inside an earlier step, the live time, a step without
+    its transition or one kept in float32."""
+    rng = np.random.default_rng(2)
+    live = _nav(rng)
+    t_live = 1_000 * MS
+    hist, last = _history(rng, 15, t_live)
+
+    def into(t_v):
+        past = hist.find(t_v, live, t_live, 20 * MS)
+        assert past is not None
+        return past.into_live()
+
+    assert into(t_live - 3 * MS) is last
+    assert into(t_live - 10 * MS) is None                  # the stored solution's own time
+    assert into(t_live - 13 * MS) is None                  # inside the step before
+    assert into(t_live) is None
+    last.phi = last.phi.astype(np.float32)
+    assert into(t_live - 3 * MS) is None
+    last.phi = None
+    assert into(t_live - 3 * MS) is None
 
 
 @pytest.mark.parametrize('name, options', [

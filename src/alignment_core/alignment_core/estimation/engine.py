@@ -299,7 +299,7 @@ class TransferAlignment(ImuEvents, EngineViews):
         if ldv is None or not ldv.valid or not self._health.running:
             self._matching = self._health.running and self._results.t_doppler_update == m.t_ns
             return
-        past = live.history.state_at(t_v, live.ins.s, live.t_ns, self._max_step_ns)
+        past = live.history.find(t_v, live.ins.s, live.t_ns, self._max_step_ns)
         if past is None:
             self._counters.unmatched_master += 1
             self._matching = False

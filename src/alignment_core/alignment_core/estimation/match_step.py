@@ -30,6 +30,8 @@ from alignment_core.estimation.models.velocity_matching import (
     misalignment_k,
 )
 from alignment_core.geometry.rotations_compiled import quat_mul_k, rotvec_to_dcm_k
+from alignment_core.navigation.history import SlaveSnapshot
+from alignment_core.navigation.history_kernels import carried_k, slave_between_k
 from alignment_core.navigation.strapdown import NavState
 
 _INF = float('inf')
@@ -70,12 +72,15 @@ def layers_of(model: ErrorModel) -> Layers | None:
 class Fed(NamedTuple):
     """An accepted update fed back: the state before feedback, the one the filter keeps after
     it, the misalignment and its sigma (aircraft axes, rad), and the slave's attitude at the
-    match's validity time after the feedback (4,)."""
+    match's validity time after the feedback (4,); for a match inside the slave's last step, the
+    stored solution it started from with its attitude (4,) and velocity (3,) carried by the
+    feedback (SlaveHistory.correct's), else None."""
     x: np.ndarray
     x_kept: np.ndarray
     mu: np.ndarray
     mu_sigma: np.ndarray
     q_valid: np.ndarray
+    carried: tuple[SlaveSnapshot, np.ndarray, np.ndarray] | None = None
 
 
 def _matrix(a: np.ndarray) -> np.ndarray:
@@ -89,7 +94,8 @@ def update_and_feed_back(kf: KalmanFilter, layers: Layers, z: np.ndarray, u_n: n
                          c_nom: np.ndarray | None = None, w_m: np.ndarray | None = None,
                          a_n: np.ndarray | None = None, w_n: np.ndarray | None = None,
                          beam_n: np.ndarray | None = None, q_past: np.ndarray | None = None,
-                         phi_acc: np.ndarray | None = None) -> tuple[UpdateResult, Fed | None]:
+                         phi_acc: np.ndarray | None = None, step: tuple[SlaveSnapshot, float] | None = None
+                         ) -> tuple[UpdateResult, Fed | None]:
     """kf.update with velocity matching's measurement (z = z_vel, u_n the lever-arm and deck
     velocity, nav frame, r (3, 3)) and the layers' columns (the delay's a_n, the lever arm's
     C_m [w_m x] with the master attitude c_m (3, 3) and body rate w_m), projected on a beam LDV's
@@ -97,18 +103,26 @@ def update_and_feed_back(kf: KalmanFilter, layers: Layers, z: np.ndarray, u_n: n
     check_health; if accepted, the model's feedback into the live solution nav and corr (q_nb,
     v_n, bg, ba, dr replaced), the attitude q_past of the slave at the validity time carried by
     it (None: the match is at the live solution's time), and the misalignment against
-    exp([w_n dt x]) c_m c_nom. Raises as those calls raise (a singular Phi: np.linalg.LinAlgError,
-    as the update with the non-finite H numpy's solve gives)."""
+    exp([w_n dt x]) c_m c_nom. step (a, f): the match is a fraction f into the slave's step from
+    the stored solution a (its phi set) to the live one, nav: the kernel interpolates the solution
+    there (history.Past.state's), z is given as v_ref (the innovation is that solution's velocity
+    less it), q_past and phi_acc are None, and the feedback also carries a. Raises as those calls
+    raise (a singular Phi: np.linalg.LinAlgError, as the update with the non-finite H numpy's
+    solve gives)."""
     x, p, y, s = kf.arrays_to_update(3 if beam_n is None else 1)
+    f, v_a = -1.0, _NONE1
+    if step is not None:
+        a, f = step
+        q_past, phi_acc, v_a = a.q_nb, a.phi, a.v_n
     try:
-        nis, accepted, ok, x_before, q, v, bg, ba, dr, x_kept, mu, sigma, q_valid = _match(
+        nis, accepted, ok, x_before, q, v, bg, ba, dr, x_kept, mu, sigma, q_valid, q_a, v_a1 = _match(
             x, p, y, s, as_float64(z), as_float64(u_n), as_float64(r), _INF if gate is None else gate, layers.nb,
             layers.delay, layers.lever, _matrix(c_m), _NONE2 if c_nom is None else _matrix(c_nom),
             _NONE1 if w_m is None else as_float64(w_m), _NONE1 if a_n is None else as_float64(a_n),
             _NONE1 if w_n is None else as_float64(w_n), _NONE1 if beam_n is None else as_float64(beam_n),
             _NONE2 if phi_acc is None else _matrix(phi_acc), as_float64(nav.q_nb), as_float64(nav.v_n),
             as_float64(corr.bg), as_float64(corr.ba), as_float64(corr.dr),
-            _NONE1 if q_past is None else as_float64(q_past))
+            _NONE1 if q_past is None else as_float64(q_past), v_a, f)
     except np.linalg.LinAlgError:           # S or Phi singular
         nis, accepted, ok = math.nan, False, True
     upd = kf.account(y, s, nis, accepted)
@@ -119,7 +133,8 @@ def update_and_feed_back(kf: KalmanFilter, layers: Layers, z: np.ndarray, u_n: n
     nav.q_nb, nav.v_n, corr.bg, corr.ba = q, v, bg, ba
     if dr is not None:
         corr.dr = dr
-    return upd, Fed(x_before, x_kept, mu, sigma, q if q_valid is None else q_valid)
+    return upd, Fed(x_before, x_kept, mu, sigma, q if q_valid is None else q_valid,
+                    None if step is None else (step[0], q_a, v_a1))
 
 
 @kernel
@@ -151,17 +166,24 @@ def _measurement(z, u_n, r, nb, n, delay, lever, c_m, w_m, a_n, beam_n, phi_acc)
 
 @kernel
 def _match(x, p, y, s, z, u_n, r, gate, nb, delay, lever, c_m, c_nom, w_m, a_n, w_n, beam_n, phi_acc,
-           q_nb, v_n, bg, ba, dr, q_past):
+           q_nb, v_n, bg, ba, dr, q_past, v_a, f):
     """The update (x, P, y, S in place) with _measurement's z, H, R; (nis, accepted, healthy,
     then, if both, x before feedback, q_nb, v_n, bg, ba, dr (None without lever-arm states), the
-    state kept after it, mu, sigma and the slave's attitude at the validity time (None for a
-    match at the live solution's time); else Nones: a None costs nothing to hand back, an array
-    about 0.15 us: compiled_boxing.py)."""
+    state kept after it, mu, sigma, the slave's attitude at the validity time (None for a
+    match at the live solution's time) and, for f > 0, the stored solution's attitude and
+    velocity carried; else Nones: a None costs nothing to hand back, an array about 0.15 us:
+    compiled_boxing.py). f > 0: the validity time is a fraction f into the step from the stored
+    solution (q_past, v_a, its transition phi_acc) to the live one (q_nb, v_n), and z is v_ref."""
+    interpolated = f > 0.0
+    q_stored = q_past
+    if interpolated:                          # history.Past.state's solution, then the innovation
+        q_past, v_past, phi_acc = slave_between_k(q_stored, q_nb, v_a, v_n, f, phi_acc)
+        z = v_past - z
     zz, hh, rr = _measurement(z, u_n, r, nb, x.shape[0], delay, lever, c_m, w_m, a_n, beam_n, phi_acc)
     nis, accepted = update(x, p, zz, hh, rr, gate, y, s)
     ok = healthy(x, p)
     if not (accepted and ok):
-        return nis, accepted, ok, None, None, None, None, None, None, None, None, None, None
+        return nis, accepted, ok, None, None, None, None, None, None, None, None, None, None, None, None
     x_before = x.copy()
     q, v, bg1, ba1, x_kept = feedback_k(q_nb, v_n, bg, ba, x)
     dr1 = None                                # unchanged
@@ -181,4 +203,7 @@ def _match(x, p, y, s, z, u_n, r, gate, nb, delay, lever, c_m, c_nom, w_m, a_n, 
     if c_nom.shape[0] == 3:
         c_a = np.dot(c_a, c_nom)
     mu, sigma = misalignment_k(q_at, c_a, x_kept, p, nb == 15)
-    return nis, accepted, ok, x_before, q, v, bg1, ba1, dr1, x_kept, mu, sigma, q_valid
+    q_a, v_a1 = None, None                    # SlaveHistory.correct's carry of the stored solution
+    if interpolated:
+        q_a, v_a1 = carried_k(q_nb, q, v_n, v, q_stored, v_a)
+    return nis, accepted, ok, x_before, q, v, bg1, ba1, dr1, x_kept, mu, sigma, q_valid, q_a, v_a1

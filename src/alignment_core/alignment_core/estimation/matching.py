@@ -11,7 +11,7 @@ from typing import NamedTuple, Protocol, cast
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from alignment_core.compiled import FLOAT64, as_float64, kernel
+from alignment_core.compiled import FLOAT64, as_float64
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.filter_factory import EngineFilter
 from alignment_core.estimation.filters.base import NonlinearFilter, solve
@@ -24,16 +24,20 @@ from alignment_core.estimation.models.base import RateInputs
 from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.outputs import Counters
 from alignment_core.estimation.reference_force import SpotAcceleration
+from alignment_core.estimation.reference_velocity import (
+    DISPLACEMENT,
+    SURVEYED,
+    SURVEYED_CORRECTED,
+    reference_velocities,
+)
 from alignment_core.geometry.rotations import cross3, floats, quat_mul_f, quat_to_dcm
-from alignment_core.geometry.rotations_compiled import cross_k, quat_to_dcm_k
-from alignment_core.navigation.history import LdvRecord, SlaveHistory
+from alignment_core.navigation.history import LdvRecord, Past, SlaveHistory, SlaveSnapshot
 from alignment_core.navigation.strapdown import NavState, Strapdown
 from alignment_core.samples import DopplerSample, MasterSample
 from alignment_core.units import DEG
 from alignment_core.validation import ConfigError
 
-Past = tuple[NavState, np.ndarray | None]       # the slave at a validity time, Phi from there to now
-DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED = 0, 1, 2   # what the reference's lever arm adds to the deck's displacement
+PastState = tuple[NavState, np.ndarray | None]       # the slave at a validity time, Phi from there to now
 _NONE = np.empty(0)                                  # no beam, as the kernel takes it
 Extras = tuple[np.ndarray, np.ndarray | None, RateInputs | None]   # (w_n, a_n, rate) of a Match
 
@@ -242,7 +246,9 @@ class Matcher:
         at t_v; the error state is the live one (at live.t_ns), related to the one at t_v by the
         transitions in between, x(t_ins) = Phi x(t_v) (process noise over the latency neglected),
         so the measurement matrix is H Phi^-1 (identity at zero latency). The estimate is fed
-        back into the live solution, and the same correction into the stored past ones."""
+        back into the live solution, and the same correction into the stored past ones. `past`:
+        where t_v falls in the slave history (the compiled update interpolates a validity time
+        inside the slave's last step itself)."""
         uses_ldv = ref.moving or ref.beam_n is not None
         r_vel = self._r_moving if uses_ldv else self._r_parked
         if uses_ldv:
@@ -252,14 +258,21 @@ class Matcher:
             extra = ldv.var + (ratio - 1.0) * self._cfg.ldv_sigma_mps ** 2 if ratio > 1.0 else ldv.var
             if extra > 0.0:
                 r_vel = r_vel + np.eye(3) * extra
-        nav, phi_acc = past
+        kf = live.kf
+        compiled = self._layers is not None and type(kf) is KalmanFilter and kf.dtype is FLOAT64
+        if compiled and self._lowpass is None:
+            a = past.into_live()
+            if a is not None:
+                self._update_compiled(live, cast(KalmanFilter, kf), t_v, m, ref, ref.v_ref, r_vel, (a, past.f), None,
+                                      extras)
+                return
+        nav, phi_acc = past.state()
         z_vel = nav.v_n - ref.v_ref
         if self._lowpass is not None:
             z_vel = self._lowpass.step(z_vel)
-        kf = live.kf
-        if self._layers is not None and type(kf) is KalmanFilter and kf.dtype is FLOAT64 \
-                and (phi_acc is None or phi_acc.dtype == FLOAT64):
-            self._update_compiled(live, kf, t_v, m, ref, z_vel, r_vel, past, extras)
+        if compiled and (phi_acc is None or phi_acc.dtype == FLOAT64):
+            self._update_compiled(live, cast(KalmanFilter, kf), t_v, m, ref, z_vel, r_vel, None, (nav, phi_acc),
+                                  extras)
             return
         match = Match(c_m=ref.c_m, w_m=m.w_b, r=ref.r, u_n=ref.u_n, v_ref=ref.v_ref, z_vel=z_vel,
                       r_vel=r_vel, ins=nav, c_nom=self.c_nom)
@@ -295,21 +308,25 @@ class Matcher:
         res.t_mu = t_v
 
     def _update_compiled(self, live: LiveSolution, kf: KalmanFilter, t_v: int, m: MasterSample, ref: Reference,
-                         z_vel: np.ndarray, r_vel: np.ndarray, past: Past, extras: Extras | None) -> None:
+                         z: np.ndarray, r_vel: np.ndarray, step: tuple[SlaveSnapshot, float] | None,
+                         past: PastState | None, extras: Extras | None) -> None:
         """update_master's measurement, update, feedback and misalignment for velocity matching
         and its delay and lever-arm layers under the plain Kalman filter, in one compiled call
-        (match_step.py)."""
+        (match_step.py): with the slave's solution at t_v `past` and z = z_vel, or inside its
+        last step `step` (the stored solution it starts from, the fraction) and z = v_ref."""
         res = self.results
         gate = self._gate_now()
         res.dof = 3 if ref.beam_n is None else 1
         st = live.ins.s
-        nav, phi_acc = past
+        q_past = phi_acc = None
+        if past is not None:
+            nav, phi_acc = past
+            q_past = None if nav is st else nav.q_nb
         q0, v0, pos0 = st.q_nb, st.v_n, (st.lat, st.lon, st.h)
         w_n, a_n = (None, None) if extras is None else extras[:2]
         assert self._layers is not None
-        upd, fed = update_and_feed_back(kf, self._layers, z_vel, ref.u_n, r_vel, gate, st, res.corr, ref.c_m,
-                                        self.c_nom, m.w_b, a_n, w_n, ref.beam_n,
-                                        None if nav is st else nav.q_nb, phi_acc)
+        upd, fed = update_and_feed_back(kf, self._layers, z, ref.u_n, r_vel, gate, st, res.corr, ref.c_m,
+                                        self.c_nom, m.w_b, a_n, w_n, ref.beam_n, q_past, phi_acc, step)
         res.nis = upd.nis
         if self._gated(upd.accepted, gate) or fed is None:
             return
@@ -317,13 +334,13 @@ class Matcher:
         res.innovation, res.innovation_cov = upd.innovation, upd.s
         res.x = fed.x
         live.history.prune(min(t_v, live.t_ns - self._doppler_lat_ns), live.t_ns)
-        self._carry(live, q0, v0, pos0, st)           # nav's attitude: fed.q_valid
+        self._carry(live, q0, v0, pos0, st, fed.carried)      # nav's attitude: fed.q_valid
         kf.adopt_x(fed.x_kept)                         # the kernel's new array: no copy needed
         res.anchor = (ref.c_m, fed.q_valid)
         res.mu, res.mu_sigma = fed.mu, fed.mu_sigma
         res.t_mu = t_v
 
-    def update_doppler(self, live: LiveSolution, t: int, s: DopplerSample, past: Past) -> None:
+    def update_doppler(self, live: LiveSolution, t: int, s: DopplerSample, past: PastState) -> None:
         """Match the slave velocity to the radar's, resolved with the slave's own attitude, at the
         radar's validity time (the slave solution there, H Phi^-1 as for the master)."""
         nav, phi_acc = past
@@ -360,16 +377,17 @@ class Matcher:
         return x_new, self._carry(live, q0, v0, pos0, nav)
 
     def _carry(self, live: LiveSolution, q0: np.ndarray, v0: np.ndarray, pos0: tuple[float, float, float],
-               nav: NavState) -> NavState:
+               nav: NavState, carried: tuple[SlaveSnapshot, np.ndarray, np.ndarray] | None = None) -> NavState:
         """The feedback that took the live solution from (q0, v0, pos0) to its state now, applied
-        to the low-pass filter's memory, the stored past solutions and `nav`; return `nav`."""
+        to the low-pass filter's memory, the stored past solutions (`carried`: one of them with
+        its attitude and velocity so carried already) and `nav`; return `nav`."""
         st = live.ins.s
         if self._lowpass is not None:
             self._lowpass.shift(st.v_n - v0)
         if not live.history.items and nav is st:
             return nav
         dpos = (st.lat - pos0[0], st.lon - pos0[1], st.h - pos0[2])
-        live.history.correct(q0, st.q_nb, v0, st.v_n, *dpos)
+        live.history.correct(q0, st.q_nb, v0, st.v_n, *dpos, carried=carried)
         if nav is not st:
             cx, cy, cz, cw = floats(q0)
             q_corr = quat_mul_f(floats(st.q_nb), (-cx, -cy, -cz, cw))     # floats: quat_mul(q, quat_conj(q0))
@@ -377,27 +395,3 @@ class Matcher:
             nav = NavState(q_nb=q / np.sqrt(q @ q), v_n=nav.v_n + (st.v_n - v0), lat=nav.lat + dpos[0],
                            lon=nav.lon + dpos[1], h=nav.h + dpos[2])
         return nav
-
-
-@kernel
-def reference_velocities(q_nb, w_b, v_b, r0, dr, disp, arm, v_rel, beam):
-    """(C_m (3, 3), the lever arm r, u_n = C_m (w_b x r + v_rel), v_ref = C_m v_b + u_n, C_m beam, C_m w_b)
-    of a master sample's quaternion q_nb (4,), body rate w_b and velocity v_b (3,), with the LDV
-    velocity v_rel and its line of sight beam (3,, ship axes; empty for a vector LDV: an empty
-    result): the reference's attitude, the spot's velocity relative to the master, the velocity
-    the slave should have and the beam in nav axes. The lever arm (ship axes) is the deck
-    displacement disp (3,) alone (arm DISPLACEMENT), after the surveyed spot r0 (SURVEYED) or
-    after r0 and its estimated correction dr (SURVEYED_CORRECTED: (r0 + dr) + disp). Also the
-    master's rate in nav axes C_m w_b, the delay state's (numpy's C_m @ w_b: the same BLAS gemv).
-    One kernel for what were eleven numpy calls."""
-    if arm == DISPLACEMENT:
-        r = disp.copy()
-    elif arm == SURVEYED:
-        r = r0 + disp
-    else:
-        r = r0 + dr + disp
-    c_m = np.array(quat_to_dcm_k((q_nb[0], q_nb[1], q_nb[2], q_nb[3]))).reshape(3, 3)
-    rel = np.array(cross_k((w_b[0], w_b[1], w_b[2]), (r[0], r[1], r[2]))) + v_rel
-    u_n = np.dot(c_m, rel)
-    beam_n = np.dot(c_m, beam) if beam.shape[0] == 3 else np.empty(0)
-    return c_m, r, u_n, np.dot(c_m, v_b) + u_n, beam_n, np.dot(c_m, w_b)

@@ -72,29 +72,89 @@ class SlaveHistory:
         while it and it[0].t_ns < keep_from_ns and (it[1].t_ns if len(it) > 1 else t_live_ns) <= keep_from_ns:
             it.popleft()
 
-    def state_at(self, t_ns: int, live: NavState, t_live_ns: int, max_step_ns: int
-                 ) -> tuple[NavState, np.ndarray | None] | None:
-        """(solution at t_ns, Phi from t_ns to the live state, None if not known), or None when
-        t_ns is older than the history, later than the live state, or inside a step longer than
+    def find(self, t_ns: int, live: NavState, t_live_ns: int, max_step_ns: int) -> Past | None:
+        """Where t_ns falls (`Past`: the solution there is made when asked), or None when t_ns is
+        older than the history, later than the live state, or inside a step longer than
         max_step_ns (an IMU gap: no interpolation across it)."""
         if t_ns == t_live_ns:
-            return live, None
+            return Past(self, -1, 0.0, live, t_live_ns)
         it = self.items
         if t_ns > t_live_ns or not it or t_ns < it[0].t_ns:
             return None
         k = len(it) - 1
         while it[k].t_ns > t_ns:
             k -= 1
-        a = it[k]
-        b_t, b_q, b_v, b_pos = ((it[k + 1].t_ns, it[k + 1].q_nb, it[k + 1].v_n,
-                                 (it[k + 1].lat, it[k + 1].lon, it[k + 1].h)) if k + 1 < len(it)
-                                else (t_live_ns, live.q_nb, live.v_n, (live.lat, live.lon, live.h)))
-        if t_ns == a.t_ns:
-            nav, phi_acc = a.nav(), a.phi
-        elif b_t - a.t_ns > max_step_ns:
+        a_t = it[k].t_ns
+        if t_ns == a_t:
+            return Past(self, k, 0.0, live, t_live_ns)
+        b_t = it[k + 1].t_ns if k + 1 < len(it) else t_live_ns
+        if b_t - a_t > max_step_ns:
             return None
+        return Past(self, k, (t_ns - a_t) / (b_t - a_t), live, t_live_ns)
+
+    def state_at(self, t_ns: int, live: NavState, t_live_ns: int, max_step_ns: int
+                 ) -> tuple[NavState, np.ndarray | None] | None:
+        """(solution at t_ns, Phi from t_ns to the live state, None if not known), or None where
+        `find` finds nothing."""
+        past = self.find(t_ns, live, t_live_ns, max_step_ns)
+        return None if past is None else past.state()
+
+    def correct(self, q0: np.ndarray, q1: np.ndarray, v0: np.ndarray, v1: np.ndarray, dlat: float, dlon: float,
+                dh: float, carried: tuple[SlaveSnapshot, np.ndarray, np.ndarray] | None = None) -> None:
+        """Apply to every stored solution the feedback correction that took the live one from
+        attitude q0 (4,) and velocity v0 (3,) to q1 and v1: the nav-frame rotation q1 q0^-1, the
+        velocity change v1 - v0 and the position changes (one compiled call a solution).
+        carried: (a stored solution, its q and v so corrected already: a compiled match's)."""
+        if not self.items:
+            return
+        q0, q1, v0, v1 = as_float64(q0), as_float64(q1), as_float64(v0), as_float64(v1)
+        done = None if carried is None else carried[0]
+        for s in self.items:
+            if s is done:
+                assert carried is not None
+                s.q_nb, s.v_n = carried[1], carried[2]
+            else:
+                s.q_nb, s.v_n = carried_k(q0, q1, v0, v1, as_float64(s.q_nb), as_float64(s.v_n))
+            s.lat += dlat
+            s.lon += dlon
+            s.h += dh
+
+
+class Past:
+    """A validity time's place in the slave history (SlaveHistory.find): the live solution (k =
+    -1), stored solution k (f = 0), or a fraction f of the step from stored solution k to the
+    next (or the live one). `state` makes the solution there; a compiled match takes the step
+    into the live one as it is (`into_live`) and interpolates it itself (estimation/match_step.py)."""
+    __slots__ = ('history', 'k', 'f', 'live', 't_live_ns')
+
+    def __init__(self, history: SlaveHistory, k: int, f: float, live: NavState, t_live_ns: int) -> None:
+        self.history, self.k, self.f, self.live, self.t_live_ns = history, k, f, live, t_live_ns
+
+    def into_live(self) -> SlaveSnapshot | None:
+        """The stored solution the time is inside the step of, when that step ends at the live
+        solution and has its transition (float64 arrays): else None."""
+        it = self.history.items
+        if self.f == 0.0 or self.k != len(it) - 1:
+            return None
+        a = it[self.k]
+        phi, q, v = a.phi, a.q_nb, a.v_n
+        if type(phi) is _NDARRAY and phi.dtype == FLOAT64 and type(q) is _NDARRAY and q.dtype == FLOAT64 \
+                and type(v) is _NDARRAY and v.dtype == FLOAT64:
+            return a
+        return None
+
+    def state(self) -> tuple[NavState, np.ndarray | None]:
+        """(the slave solution at the time, Phi from there to the live state, None if not known)."""
+        k, f, live = self.k, self.f, self.live
+        if k < 0:
+            return live, None
+        it = self.history.items
+        a = it[k]
+        if f == 0.0:
+            nav, phi_acc = a.nav(), a.phi
         else:
-            f = (t_ns - a.t_ns) / (b_t - a.t_ns)
+            b_q, b_v, b_pos = ((it[k + 1].q_nb, it[k + 1].v_n, (it[k + 1].lat, it[k + 1].lon, it[k + 1].h))
+                               if k + 1 < len(it) else (live.q_nb, live.v_n, (live.lat, live.lon, live.h)))
             q, v, cut = slave_between_k(as_float64(a.q_nb), as_float64(b_q), as_float64(a.v_n), as_float64(b_v), f,
                                         _NO_PHI if a.phi is None else a.phi)
             nav = NavState(q_nb=q, v_n=v,
@@ -109,20 +169,6 @@ class SlaveHistory:
                 return nav, None
             phi_acc = p @ phi_acc
         return nav, phi_acc
-
-    def correct(self, q0: np.ndarray, q1: np.ndarray, v0: np.ndarray, v1: np.ndarray, dlat: float, dlon: float,
-                dh: float) -> None:
-        """Apply to every stored solution the feedback correction that took the live one from
-        attitude q0 (4,) and velocity v0 (3,) to q1 and v1: the nav-frame rotation q1 q0^-1, the
-        velocity change v1 - v0 and the position changes (one compiled call a solution)."""
-        if not self.items:
-            return
-        q0, q1, v0, v1 = as_float64(q0), as_float64(q1), as_float64(v0), as_float64(v1)
-        for s in self.items:
-            s.q_nb, s.v_n = carried_k(q0, q1, v0, v1, as_float64(s.q_nb), as_float64(s.v_n))
-            s.lat += dlat
-            s.lon += dlon
-            s.h += dh
 
 
 @dataclass(slots=True)

@@ -5,7 +5,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from alignment_core.estimation.matching import DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED, reference_velocities
+from alignment_core.estimation.reference_velocity import (
+    DISPLACEMENT,
+    SURVEYED,
+    SURVEYED_CORRECTED,
+    reference_velocities,
+)
 
 
 def test_reference_velocities_are_the_rigid_body_velocity_of_the_spot():
