@@ -7,7 +7,7 @@ latency) scenarios at 1 and 2 workers (--mc-scenarios); and, with
 src/ extracted to a temporary directory), measured alternately with today's in the same run so
 both see the same machine load.
 
-    scripts/bench.sh speed [--runs 4] [--seconds 60] [--repeat 3] [--against REV] [--graph-runs 1]
+    scripts/bench.sh speed [--runs 4] [--runs-2 N] [--seconds 60] [--repeat 3] [--against REV] [--graph-runs 1]
     scripts/bench.sh speed --publish [--graph-runs 3]     the goals' table, published
     scripts/bench.sh speed --render                       re-render the last published run
 
@@ -24,7 +24,8 @@ n = 15, m = 3 workload with the engine's measurement matrix H = [0 I 0 0 -[u x]]
 predict + update, best of --repeat, the two filters' blocks of 100 steps in turn. pyins:
 bench/monte_carlo.py's peer workload.
 Monte Carlo: each scenario (of each tree) first runs 10 s untimed (`--child warm`), so that no timed
-run compiles kernels (their disk cache is keyed by the package's sources).
+run compiles kernels (their disk cache is keyed by the package's sources); --runs runs on one
+worker, --runs-2 (default: --runs) on two: the goal's own count is 100 runs on the two cores.
 Graph: --graph-runs runs of the default scenario through scripts/run_graph.sh at
 --real-time-factor 0 (bench/graph_rtf.py's run; today's tree only: REV's would need its own
 built workspace), each with its whole-run RTF, start-up (command to first message recorded),
@@ -55,7 +56,7 @@ import speed_table
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ('alignment_core', 'alignment_experiments')
-SETTINGS = ('runs', 'seconds', 'repeat', 'kf_steps', 'graph_runs', 'mc_scenarios')
+SETTINGS = ('runs', 'runs_2', 'seconds', 'repeat', 'kf_steps', 'graph_runs', 'mc_scenarios')
 """The arguments that shape the measurements, recorded with a published run."""
 
 
@@ -152,7 +153,7 @@ def mc_rpm(runs: int, workers: int, scenario: str) -> dict:
     c, t = cpu(), time.perf_counter()
     monte_carlo.run_many(specs, workers=workers, progress=False)
     wall = time.perf_counter() - t
-    return {'wall_s': wall, 'runs_per_min': 60.0 * runs / wall, 'cpu_s_per_run': (cpu() - c) / runs}
+    return {'runs': runs, 'wall_s': wall, 'runs_per_min': 60.0 * runs / wall, 'cpu_s_per_run': (cpu() - c) / runs}
 
 
 def warm(scenario: str) -> dict:
@@ -205,7 +206,8 @@ def run(part: str, a: argparse.Namespace, pythonpath: str | None, scenario: str 
     env = dict(os.environ)
     if pythonpath:
         env['PYTHONPATH'] = pythonpath + os.pathsep + env.get('PYTHONPATH', '')
-    args = [sys.executable, __file__, '--child', part, '--runs', str(a.runs), '--seconds', str(a.seconds),
+    runs = a.runs_2 if part == 'mc2' and a.runs_2 else a.runs
+    args = [sys.executable, __file__, '--child', part, '--runs', str(runs), '--seconds', str(a.seconds),
             '--repeat', str(a.repeat), '--kf-steps', str(a.kf_steps), '--peer-seconds', str(a.peer_seconds),
             '--scenario', scenario]
     p = subprocess.run(args, env=env, capture_output=True, text=True, cwd=ROOT)
@@ -255,6 +257,7 @@ def cpu_model() -> str:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument('--runs', type=int, default=4, help='Monte Carlo runs per worker setting')
+    ap.add_argument('--runs-2', type=int, default=None, help='Monte Carlo runs on two workers (default: --runs)')
     ap.add_argument('--seconds', type=float, default=60.0, help='simulated seconds of the engine run')
     ap.add_argument('--repeat', type=int, default=3)
     ap.add_argument('--kf-steps', type=int, default=3000)
@@ -306,7 +309,7 @@ def main() -> None:
               f'-> the engine step is {peer["pyins_us"] / today:.0f}x faster')
     else:
         print('pyins: not installed (scripts/bench.sh installs requirements-bench.txt)')
-    print(f'Monte Carlo, 300 s, {a.runs} runs per setting:')
+    print(f'Monte Carlo, 300 s, {a.runs} runs on one worker, {a.runs_2 or a.runs} on two:')
     for (sc, name, w), r in mc.items():
         print(f'  {sc:10s} {name:12s} workers={w}: {r["wall_s"]:7.1f} s  {r["runs_per_min"]:6.1f} runs/min  '
               f'-> 100 runs in {100 / r["runs_per_min"]:5.1f} min; {r["cpu_s_per_run"]:5.1f} CPU s per run')
@@ -331,7 +334,7 @@ def main() -> None:
                          'cpus': os.cpu_count(), 'cpu': cpu_model(), 'python': interpreter(), 'load_start': load0,
                          'load_end': os.getloadavg()[0],
                          'command': f'scripts/bench.sh speed {args}',
-                         'settings': {k: v for k, v in vars(a).items() if k in SETTINGS}},
+                         'settings': {k: v for k, v in vars(a).items() if k in SETTINGS and v is not None}},
                'engine': eng['today'], 'kf': kf, 'pyins': peer or None, 'graphs': graphs, 'dds': dds,
                'memory': memory,
                'mc': {sc: {str(w): mc[(sc, 'today', w)] for w in (1, 2)} for sc in a.mc_scenarios}}

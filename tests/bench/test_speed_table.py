@@ -150,3 +150,16 @@ def test_the_transport_line_says_when_its_benchmark_ran_a_setting_again():
 def test_the_monte_carlo_line_says_how_many_runs_it_timed():
     text = speed_table.render(run())
     assert '100.0 runs/min on 2 workers (4 runs, 1.2 CPU s per run)' in text
+
+
+def test_each_worker_count_shows_its_own_runs():
+    """Runs counted per worker setting (--runs-2): the two-worker line gives its own count, and the
+    one-worker line its count when it differs; a run recorded before the counts were (a setting)
+    shows the setting's."""
+    two_counts = {'1': {'runs': 10, 'runs_per_min': 50.0, 'cpu_s_per_run': 1.0},
+                  '2': {'runs': 100, 'runs_per_min': 101.0, 'cpu_s_per_run': 1.1}}
+    measured = {goal: m for goal, _, m, _ in speed_table.rows(run(mc={'deck': two_counts, 'deck_paper': mc(150.0)}))}
+    assert measured['Monte Carlo, 300 s `deck`'] == ('101.0 runs/min on 2 workers (100 runs, 1.1 CPU s per run), '
+                                                     '50.0 on 1 (10 runs)')
+    assert measured['Monte Carlo, 300 s `deck_paper`'] == ('150.0 runs/min on 2 workers (4 runs, 1.2 CPU s per run), '
+                                                           '75.0 on 1')
