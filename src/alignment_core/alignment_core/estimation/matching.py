@@ -209,16 +209,17 @@ class Matcher:
         w_n = ref.w_n if ref.w_n is not None and type(w_m) is np.ndarray and w_m.flags.c_contiguous \
             and w_m.flags.aligned else c_m @ w_m
         prev, self._prev_master = self._prev_master, (t_v, c_m, m.v_b, m.w_b)
-        iv = None
-        for item in reversed(self._intervals):
-            if item[0] == t_v:
-                iv = item
-                break
-            if item[0] < t_v:
-                break
         a_n = None
         if self._cfg.delay_acceleration == 'reference' and self.spot is not None:
             a_n = self.spot.acceleration()                  # the fit, when it has one
+        iv = None                                           # the IMU interval ending at t_v, where needed
+        if a_n is None or self._cfg.rate_matching:
+            for item in reversed(self._intervals):
+                if item[0] == t_v:
+                    iv = item
+                    break
+                if item[0] < t_v:
+                    break
         if a_n is None:
             parked_iv = iv if iv is not None else _interval_containing(self._intervals, t_v)
             if not ref.moving and parked_iv is not None:

@@ -107,8 +107,9 @@ class SlaveHistory:
         carried: (a stored solution, its q and v so corrected already: a compiled match's)."""
         if not self.items:
             return
-        q0, q1, v0, v1 = as_float64(q0), as_float64(q1), as_float64(v0), as_float64(v1)
         done = None if carried is None else carried[0]
+        if len(self.items) > 1 or self.items[0] is not done:
+            q0, q1, v0, v1 = as_float64(q0), as_float64(q1), as_float64(v0), as_float64(v1)
         for s in self.items:
             if s is done:
                 assert carried is not None
