@@ -5,10 +5,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from alignment_core.estimation.reference_force import SpotAcceleration
 from alignment_core.estimation.reference_velocity import (
     DISPLACEMENT,
     SURVEYED,
     SURVEYED_CORRECTED,
+    reference_and_fit,
     reference_velocities,
 )
 
@@ -71,3 +73,34 @@ def test_the_delay_states_nav_rate_is_numpys_product_whatever_the_layout():
             ref = matcher.reference(m, None, np.zeros(3))
             w_n = matcher.extras(None, m.t_ns, m, ref)[0]
             assert w_n.tobytes() == (ref.c_m @ w_b).tobytes()
+
+
+def test_the_reference_with_the_spot_fit_is_the_two_calls():
+    """reference_and_fit against reference_velocities then SpotAcceleration.add with the
+    reference's C_m and arm, sample by sample through a window that fills, an arm estimated
+    (moving) then still, a repeated stamp and a gap (clear): every reference array, and the spot's
+    acceleration after each sample, bit for bit."""
+    rng = np.random.default_rng(8)
+    one, two = SpotAcceleration(0.5), SpotAcceleration(0.5)
+    r0, dr = rng.normal(0.0, 30.0, 3), np.zeros(3)
+    t, fitted = 0, 0
+    for k in range(200):
+        if k == 120:
+            one.clear()
+            two.clear()
+        if k < 80:
+            dr = dr + rng.normal(0.0, 0.01, 3)
+        t = t if k % 41 == 7 else t + int(rng.integers(15_000_000, 25_000_000))
+        q = Rotation.from_rotvec(rng.normal(0.0, 0.05, 3)).as_quat()
+        args = (q, rng.normal(0.0, 0.05, 3), rng.normal(0.0, 1.0, 3), r0, dr, rng.normal(0.0, 0.01, 3),
+                SURVEYED_CORRECTED, rng.normal(0.0, 0.1, 3), rng.normal(0.0, 1.0, 3))
+        want = reference_velocities(*args)
+        one.add(t, want[0], args[2], args[1], want[1])
+        *got, start, ok, slope = reference_and_fit(*args, *two.buffers(), t)
+        two.take(start, ok, slope)
+        for g, w in zip(got, want, strict=True):
+            assert g.tobytes() == w.tobytes()
+        a, b = one.acceleration(), two.acceleration()
+        assert (a is None) == (b is None) and (a is None or a.tobytes() == b.tobytes())
+        fitted += a is not None
+    assert 100 < fitted < 190

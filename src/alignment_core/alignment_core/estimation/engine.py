@@ -290,12 +290,12 @@ class TransferAlignment(ImuEvents, EngineViews):
             ldv = self._rel.stand_in(t_v, self._ldv_history.latest_ns, self._launch.moving, self._deck.displacement)
         live = self._live
         reanchor = live is not None and self._anchor_from is not None
-        ref = self._matcher.reference(m, ldv, self._deck.displacement, surveyed=reanchor)
+        # matching, the sample also goes into the deck spot's fit (the matcher's spot, reference_force.py)
+        ref = self._matcher.reference(m, ldv, self._deck.displacement, surveyed=reanchor,
+                                      fit_at=None if live is None or reanchor else t_v)
         if live is None or reanchor:
             self._anchor(t_v, m, ref)
             return
-        if self._spot_accel is not None:
-            self._spot_accel.add(t_v, ref.c_m, m.v_b, m.w_b, ref.r)
         if ldv is None or not ldv.valid or not self._health.running:
             self._matching = self._health.running and self._results.t_doppler_update == m.t_ns
             return

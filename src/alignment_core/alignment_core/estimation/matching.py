@@ -28,6 +28,7 @@ from alignment_core.estimation.reference_velocity import (
     DISPLACEMENT,
     SURVEYED,
     SURVEYED_CORRECTED,
+    reference_and_fit,
     reference_velocities,
 )
 from alignment_core.geometry.rotations import cross3, floats, quat_mul_f, quat_to_dcm
@@ -179,19 +180,26 @@ class Matcher:
         self._intervals.append((t_ns, h, gyro, dv_n))
 
     def reference(self, m: MasterSample, ldv: LdvRecord | None, deck_disp: np.ndarray,
-                  surveyed: bool = False) -> Reference:
+                  surveyed: bool = False, fit_at: int | None = None) -> Reference:
         """The reference for the slave from master sample m and the LDV at its validity time;
         `surveyed`: with the surveyed lever arm whatever the treatment (where the slave is, to
-        place it there after a gap), else the one the matches use."""
+        place it there after a gap), else the one the matches use. fit_at: the validity time to
+        add the sample to the deck spot's fit at (`spot.add` with the reference's C_m and arm), in
+        the same compiled call."""
         moving = ldv is not None and ldv.moving
         disp = ldv.disp if ldv is not None else deck_disp
         beam = ldv.beam if ldv is not None and ldv.valid else None
         # a beam LDV is the measurement parked too (its one row); a vector one only once moving
         v_rel = ldv.v_s if (ldv is not None and ldv.valid and (moving or beam is not None)) else np.zeros(3)
         arm = SURVEYED_CORRECTED if surveyed else self._arm
-        c_m, r, u_n, v_ref, beam_n, w_n = reference_velocities(
-            as_float64(m.q_nb), as_float64(m.w_b), as_float64(m.v_b), self._r0, as_float64(self.results.corr.dr),
-            as_float64(disp), arm, as_float64(v_rel), _NONE if beam is None else as_float64(beam))
+        args = (as_float64(m.q_nb), as_float64(m.w_b), as_float64(m.v_b), self._r0, as_float64(self.results.corr.dr),
+                as_float64(disp), arm, as_float64(v_rel), _NONE if beam is None else as_float64(beam))
+        spot = self.spot
+        if fit_at is None or spot is None:
+            c_m, r, u_n, v_ref, beam_n, w_n = reference_velocities(*args)
+        else:
+            c_m, r, u_n, v_ref, beam_n, w_n, start, fitted, slope = reference_and_fit(*args, *spot.buffers(), fit_at)
+            spot.take(start, fitted, slope)
         return Reference(c_m, r, v_rel, u_n, v_ref, moving, None if beam is None else beam_n, w_n)
 
     def extras(self, live: LiveSolution, t_v: int, m: MasterSample, ref: Reference) -> Extras:

@@ -44,8 +44,7 @@ class SpotAcceleration:
         self._vw = np.zeros((0, 2, 3))               # (cap, 2, 3) velocity and body rate, ship axes
         self._rows = np.zeros((0, 3))                # (cap, 3) the spot's velocity with the arm _rows_r
         self._start = self._end = self._rows_end = 0
-        self._r = np.zeros(3)
-        self._rows_r = b''
+        self._rows_r = np.zeros(3)                   # the arm the rows [., _rows_end) were made with
         self._value: np.ndarray | None = None
 
     def clear(self) -> None:
@@ -71,21 +70,25 @@ class SpotAcceleration:
         attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m.
         The fit is made at once, in the same call (its readers, the IMU steps while parked and
         the delay state, read it after nearly every master sample)."""
+        self.take(*append_and_fit(*self.buffers(), np.ascontiguousarray(r, dtype=float), t_ns, as_float64(c_m),
+                                  as_float64(v_b), as_float64(w_b)))
+
+    def buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int, int, int, float]:
+        """append_and_fit's arguments before the arm, with room for one more sample (a caller
+        that computes the arm in the same compiled call: estimation/reference_velocity.py)."""
         if self._end == len(self._t):
             self._make_room()
-        r = np.asarray(r, dtype=float)
-        arm = r.tobytes()
-        moved = arm != self._rows_r                  # each row depends on the newest arm: recomputed when it moves
-        start, fitted, value = append_and_fit(
-            self._t, self._c, self._vw, self._rows, r, -1 if moved else self._rows_end, self._start, self._end, t_ns,
-            as_float64(c_m), as_float64(v_b), as_float64(w_b), self._window_ns, MIN_FILL * self._window_ns)
+        return (self._t, self._c, self._vw, self._rows, self._rows_r, self._rows_end, self._start, self._end,
+                self._window_ns, MIN_FILL * self._window_ns)
+
+    def take(self, start: int, fitted: bool, value: np.ndarray) -> None:
+        """append_and_fit's outcome for the buffers `buffers` gave."""
         if start < 0:
             return
         self._start, self._end = start, self._end + 1
-        self._r = r
         self._value = value if fitted else None
         if fitted:
-            self._rows_r, self._rows_end = arm, self._end
+            self._rows_end = self._end
 
     def acceleration(self) -> np.ndarray | None:
         """d v / dt (3,) at the newest sample, or None while the samples span less than MIN_FILL
@@ -113,18 +116,27 @@ def append_sample(t, c, vw, start, end, t_ns, c_m, v_b, w_b, window_ns):
 
 
 @kernel
-def append_and_fit(t, c, vw, rows, r, rows_end, start, end, t_ns, c_m, v_b, w_b, window_ns, min_span_ns):
+def append_and_fit(t, c, vw, rows, rows_r, rows_end, start, end, window_ns, min_span_ns, r, t_ns, c_m, v_b, w_b):
     """append_sample of a master sample, then, once the window's samples are four or more and
     span min_span_ns, spot_slope over it with the rows from rows_end on made anew (from its first
-    row when rows_end is -1: the arm moved). Returns (the window's first row, or -1 when nothing
-    was appended; whether it was fitted; the slope (3,), empty when not)."""
+    row when the arm r (3,) is not, bit for bit, the arm rows_r (3,) they were made with; none
+    are kept before the first fit, rows_end 0); when fitted, rows_r is r after. Returns (the
+    window's first row, or -1 when nothing was appended; whether it was fitted; the slope (3,),
+    empty when not)."""
     s = append_sample(t, c, vw, start, end, t_ns, c_m, v_b, w_b, window_ns)
     if s < 0:
         return s, False, np.empty(0)
     e = end + 1
     if e - s < 4 or t[e - 1] - t[s] < min_span_ns:
         return s, False, np.empty(0)
-    return s, True, spot_slope(t, c, vw, rows, r, s if rows_end < 0 else max(rows_end, s), s, e)
+    moved = False
+    bits, known_bits = r.view(np.int64), rows_r.view(np.int64)
+    for i in range(3):
+        moved = moved or bits[i] != known_bits[i]
+    slope = spot_slope(t, c, vw, rows, r, s if moved else max(rows_end, s), s, e)
+    for i in range(3):
+        rows_r[i] = r[i]
+    return s, True, slope
 
 
 @kernel

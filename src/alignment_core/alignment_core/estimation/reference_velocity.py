@@ -1,11 +1,14 @@
 """The velocities a master sample predicts for the slave (estimation/matching.py's reference): the
 master's attitude, the lever arm to the aircraft's spot with the deck displacement, the spot's
-velocity relative to the master and the velocity the slave should have, in one compiled call."""
+velocity relative to the master and the velocity the slave should have, in one compiled call,
+with the master sample into the deck spot's fit (reference_force.py) in the same call where the
+engine fits it."""
 from __future__ import annotations
 
 import numpy as np
 
 from alignment_core.compiled import kernel
+from alignment_core.estimation.reference_force import append_and_fit
 from alignment_core.geometry.rotations_compiled import cross_k, quat_to_dcm_k
 
 DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED = 0, 1, 2   # what the reference's lever arm adds to the deck's displacement
@@ -33,3 +36,15 @@ def reference_velocities(q_nb, w_b, v_b, r0, dr, disp, arm, v_rel, beam):
     u_n = np.dot(c_m, rel)
     beam_n = np.dot(c_m, beam) if beam.shape[0] == 3 else np.empty(0)
     return c_m, r, u_n, np.dot(c_m, v_b) + u_n, beam_n, np.dot(c_m, w_b)
+
+
+@kernel
+def reference_and_fit(q_nb, w_b, v_b, r0, dr, disp, arm, v_rel, beam, t, c, vw, rows, rows_r, rows_end, start, end,
+                      window_ns, min_span_ns, t_ns):
+    """reference_velocities, then the master sample valid at t_ns into the deck spot's fit with
+    the reference's C_m and lever arm (reference_force.append_and_fit, its buffers from t on: what
+    SpotAcceleration.add does): both calls' results, in one call."""
+    c_m, r, u_n, v_ref, beam_n, w_n = reference_velocities(q_nb, w_b, v_b, r0, dr, disp, arm, v_rel, beam)
+    start1, fitted, slope = append_and_fit(t, c, vw, rows, rows_r, rows_end, start, end, window_ns, min_span_ns, r,
+                                           t_ns, c_m, v_b, w_b)
+    return c_m, r, u_n, v_ref, beam_n, w_n, start1, fitted, slope
