@@ -20,15 +20,16 @@ from alignment_core.estimation import matching
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.filters.base import solve
 from alignment_core.estimation.filters.kalman import KalmanFilter
-from alignment_core.estimation.health import NumericalBreakdownError, check_health
+from alignment_core.estimation.health import BREAKDOWN_ERRORS, NumericalBreakdownError, check_health
 from alignment_core.estimation.match_step import Layers, _match, _measurement, layers_of, update_and_feed_back
 from alignment_core.estimation.models import Corrections, Match, make_model
 from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.models.lever_arm import LeverArmStates
 from alignment_core.estimation.models.master_delay import MasterDelayState
 from alignment_core.estimation.models.velocity_matching import VelocityMatching
-from alignment_core.navigation.history import SlaveHistory, SlaveSnapshot
-from alignment_core.navigation.strapdown import NavState
+from alignment_core.estimation.outputs import Counters
+from alignment_core.navigation.history import Past, SlaveHistory, SlaveSnapshot
+from alignment_core.navigation.strapdown import NavState, Strapdown
 
 MS = 1_000_000
 C_NOM = np.array([[0.8, 0.6, 0.0], [-0.6, 0.8, 0.0], [0.0, 0.0, 1.0]])
@@ -355,3 +356,73 @@ def test_an_engine_run_is_the_same_through_the_calls(name, options, monkeypatch)
     assert calls > 500
     if 'filter.gate_chi2' in options:
         assert filt.counters.gated > 0 and filt.counters.gate_released > 0
+
+
+def _matcher_case(rng: np.random.Generator, huge: bool):
+    """A matcher of vm15 with the delay and lever-arm states, its live solution with a slave
+    history whose last step the validity time t_v falls inside, and a reference; huge: the
+    slave's east velocity 1.5e308 m/s and the reference's -1.5e308 m/s (their difference
+    overflows)."""
+    cfg = FilterConfig(**MODELS['vm15+delay+lever'])
+    model = make_model(cfg)
+    matcher = matching.Matcher(cfg, model, 100.0, int(0.2e9), Counters())
+    nav, corr, kf, match = _case(rng, model.n, extras=1)
+    t_live = 1_000 * MS
+    hist, _ = _history(rng, model.n, t_live)
+    v_ref = match.v_ref.copy()
+    if huge:
+        for s in [*hist.items, nav]:
+            s.v_n = s.v_n.copy()
+            s.v_n[0] = 1.5e308
+        v_ref[0] = -1.5e308
+    live = matching.LiveSolution(Strapdown(nav), kf, t_live, hist)
+    ref = matching.Reference(match.c_m, match.r, np.zeros(3), match.u_n, v_ref, False, None, match.w_n)
+    m = SimpleNamespace(w_b=match.w_m, t_ns=t_live)
+    ldv = SimpleNamespace(var=0.0)
+    return matcher, live, t_live - 4 * MS, m, ref, ldv, (match.w_n, match.a_n, None)
+
+
+@pytest.mark.parametrize('huge', [False, True])
+def test_a_step_whose_innovation_numpy_would_warn_of_goes_the_way_before(huge):
+    """A validity time inside the slave's last step goes to the kernel whole (step_in_kernel);
+    where numpy's z_vel = v - v_ref would overflow, the kernel declines (nothing done) and the
+    match goes the way it went before, numpy's warning included: the filter, the solution and
+    the results are the same, bit for bit, as without the step."""
+    import warnings
+    got = []
+    for use_step in (True, False):
+        matcher, live, t_v, m, ref, ldv, extras = _matcher_case(np.random.default_rng(3), huge)
+        past = live.history.find(t_v, live.ins.s, live.t_ns, 20 * MS)
+        step = matcher.step_in_kernel(live, past)
+        assert step is live.history.items[-1]
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter('always')
+            try:
+                matcher.update_master(live, t_v, m, ref, ldv, past, step if use_step else None, extras, 0, 0)
+            except BREAKDOWN_ERRORS:
+                pass
+        assert any('overflow encountered in subtract' in str(w.message) for w in caught) == huge
+        st = live.ins.s
+        got.append((live.kf.x, live.kf.P, st.q_nb, st.v_n, matcher.results.nis, matcher.results.mu,
+                    [(s.q_nb, s.v_n) for s in live.history.items]))
+    for a, b in zip(*got):
+        if isinstance(a, list):
+            assert all(_same(x, y) for pa, pb in zip(a, b) for x, y in zip(pa, pb))
+        else:
+            assert _same(a, b)
+
+
+def test_the_solution_before_the_last_step_is_made_where_state_at_was(monkeypatch):
+    """A validity time the kernel does not interpolate: the engine makes the slave's solution there
+    before the delay's inputs and outside the update's breakdown handling, as state_at was
+    made (an error there ends processing, not the filter)."""
+    sc = scenario.load('deck', {'duration_s': 3.0}, seed=5)
+    inp = pipeline.simulate(sc)
+
+    def broken(self):
+        raise FloatingPointError('underflow in the product of the transitions')
+    monkeypatch.setattr(SlaveHistory, 'find', lambda self, *a: Past(self, 0, 0.0, a[0], a[1]))
+    monkeypatch.setattr(Past, '_make_state', broken)
+    monkeypatch.setattr(matching.Matcher, 'extras', lambda *a: pytest.fail('extras before the solution'))
+    with pytest.raises(FloatingPointError, match='underflow'):
+        pipeline.align(sc, inp)

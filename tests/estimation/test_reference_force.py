@@ -268,3 +268,16 @@ def test_the_fit_made_as_each_sample_enters_is_the_fit_of_its_window_made_afresh
         assert got is not None and got.tobytes() == want.tobytes()
         checked += 1
     assert checked > 500
+
+
+@pytest.mark.parametrize('arm', [2.0, np.float64(2.0), np.ones(1), np.ones(4), np.ones((3, 1)), np.empty(0)])
+def test_a_lever_arm_that_is_no_3_vector_is_refused(arm):
+    """The fit's kernel reads three components of the arm (and checks no bounds): any other shape
+    is refused with a clear error, and the fit is left as it was."""
+    acc = SpotAcceleration(1.0)
+    for k in range(60):
+        acc.add(20_000_000 * k, np.eye(3), np.array([0.1 * k, 0.0, 0.0]), np.zeros(3), np.array([1.0, 2.0, 3.0]))
+    before = acc.acceleration()
+    with pytest.raises(ValueError, match='3-vector'):
+        acc.add(20_000_000 * 60, np.eye(3), np.zeros(3), np.zeros(3), arm)
+    assert acc.acceleration() is before

@@ -304,9 +304,12 @@ class TransferAlignment(ImuEvents, EngineViews):
             self._counters.unmatched_master += 1
             self._matching = False
             return
+        step = self._matcher.step_in_kernel(live, past)
+        if step is None:
+            past.state()                                   # the slave there (its errors raised here)
         extras = self._matcher.extras(live, t_v, m, ref) if self._track_intervals else None
         try:
-            self._matcher.update_master(live, t_v, m, ref, ldv, past, extras, self._ldv_history.spacing_ns,
+            self._matcher.update_master(live, t_v, m, ref, ldv, past, step, extras, self._ldv_history.spacing_ns,
                                         self._master_spacing_ns)
         except BREAKDOWN_ERRORS as e:
             self._fail(f'update: {e}')

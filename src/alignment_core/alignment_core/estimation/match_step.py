@@ -35,6 +35,7 @@ from alignment_core.navigation.history_kernels import carried_k, slave_between_k
 from alignment_core.navigation.strapdown import NavState
 
 _INF = float('inf')
+_DECLINED = -1.0                 # _match's nis where it did nothing (a NIS is never negative)
 _NONE1 = np.empty(0)             # an absent vector or matrix, as the kernel takes it
 _NONE2 = np.empty((0, 0))
 _NDARRAY = np.ndarray
@@ -95,7 +96,7 @@ def update_and_feed_back(kf: KalmanFilter, layers: Layers, z: np.ndarray, u_n: n
                          a_n: np.ndarray | None = None, w_n: np.ndarray | None = None,
                          beam_n: np.ndarray | None = None, q_past: np.ndarray | None = None,
                          phi_acc: np.ndarray | None = None, step: tuple[SlaveSnapshot, float] | None = None
-                         ) -> tuple[UpdateResult, Fed | None]:
+                         ) -> tuple[UpdateResult | None, Fed | None]:
     """kf.update with velocity matching's measurement (z = z_vel, u_n the lever-arm and deck
     velocity, nav frame, r (3, 3)) and the layers' columns (the delay's a_n, the lever arm's
     C_m [w_m x] with the master attitude c_m (3, 3) and body rate w_m), projected on a beam LDV's
@@ -106,9 +107,10 @@ def update_and_feed_back(kf: KalmanFilter, layers: Layers, z: np.ndarray, u_n: n
     exp([w_n dt x]) c_m c_nom. step (a, f): the match is a fraction f into the slave's step from
     the stored solution a (its phi set) to the live one, nav: the kernel interpolates the solution
     there (history.Past.state's), z is given as v_ref (the innovation is that solution's velocity
-    less it), q_past and phi_acc are None, and the feedback also carries a. Raises as those calls
-    raise (a singular Phi: np.linalg.LinAlgError, as the update with the non-finite H numpy's
-    solve gives)."""
+    less it), q_past and phi_acc are None, and the feedback also carries a; (None, None), nothing
+    done, where numpy's subtraction of v_ref would have warned (an overflow, inf - inf: the
+    caller then takes that subtraction as it was). Raises as those calls raise (a singular Phi:
+    np.linalg.LinAlgError, as the update with the non-finite H numpy's solve gives)."""
     x, p, y, s = kf.arrays_to_update(3 if beam_n is None else 1)
     f, v_a = -1.0, _NONE1
     if step is not None:
@@ -125,6 +127,8 @@ def update_and_feed_back(kf: KalmanFilter, layers: Layers, z: np.ndarray, u_n: n
             _NONE1 if q_past is None else as_float64(q_past), v_a, f)
     except np.linalg.LinAlgError:           # S or Phi singular
         nis, accepted, ok = math.nan, False, True
+    if nis == _DECLINED:
+        return None, None
     upd = kf.account(y, s, nis, accepted)
     if not ok:
         raise NumericalBreakdownError(UNHEALTHY)
@@ -173,12 +177,19 @@ def _match(x, p, y, s, z, u_n, r, gate, nb, delay, lever, c_m, c_nom, w_m, a_n, 
     match at the live solution's time) and, for f > 0, the stored solution's attitude and
     velocity carried; else Nones: a None costs nothing to hand back, an array about 0.15 us:
     compiled_boxing.py). f > 0: the validity time is a fraction f into the step from the stored
-    solution (q_past, v_a, its transition phi_acc) to the live one (q_nb, v_n), and z is v_ref."""
+    solution (q_past, v_a, its transition phi_acc) to the live one (q_nb, v_n), and z is v_ref;
+    then nis -1 and nothing done where numpy's z = v - v_ref would warn (overflow, inf - inf)."""
     interpolated = f > 0.0
     q_stored = q_past
     if interpolated:                          # history.Past.state's solution, then the innovation
         q_past, v_past, phi_acc = slave_between_k(q_stored, q_nb, v_a, v_n, f, phi_acc)
-        z = v_past - z
+        z_vel = v_past - z
+        for i in range(3):
+            d, a, b = z_vel[i], v_past[i], z[i]
+            if (math.isinf(d) and math.isfinite(a) and math.isfinite(b)) or (
+                    math.isnan(d) and not (math.isnan(a) or math.isnan(b))):
+                return -1.0, False, True, None, None, None, None, None, None, None, None, None, None, None, None
+        z = z_vel
     zz, hh, rr = _measurement(z, u_n, r, nb, x.shape[0], delay, lever, c_m, w_m, a_n, beam_n, phi_acc)
     nis, accepted = update(x, p, zz, hh, rr, gate, y, s)
     ok = healthy(x, p)

@@ -249,15 +249,26 @@ class Matcher:
             self._counters.rate_unmatched += 1
         return w_n, a_n, rate
 
+    def step_in_kernel(self, live: LiveSolution, past: Past) -> SlaveSnapshot | None:
+        """The stored solution whose step into the live one the compiled update interpolates at
+        `past` itself (match_step.py: velocity matching and its layers under the plain float64
+        Kalman filter, no low-pass, a time inside the last step), else None: update_master then
+        takes `past.state()`, which the engine makes first, where state_at was made."""
+        kf = live.kf
+        if self._layers is None or type(kf) is not KalmanFilter or kf.dtype is not FLOAT64 \
+                or self._lowpass is not None:
+            return None
+        return past.into_live()
+
     def update_master(self, live: LiveSolution, t_v: int, m: MasterSample, ref: Reference, ldv: LdvRecord,
-                      past: Past, extras: Extras | None, ldv_spacing_ns: int, master_spacing_ns: int) -> None:
+                      past: Past, step: SlaveSnapshot | None, extras: Extras | None, ldv_spacing_ns: int,
+                      master_spacing_ns: int) -> None:
         """Velocity (+ attitude) match at t_v. The innovation is formed against the slave solution
         at t_v; the error state is the live one (at live.t_ns), related to the one at t_v by the
         transitions in between, x(t_ins) = Phi x(t_v) (process noise over the latency neglected),
         so the measurement matrix is H Phi^-1 (identity at zero latency). The estimate is fed
         back into the live solution, and the same correction into the stored past ones. `past`:
-        where t_v falls in the slave history (the compiled update interpolates a validity time
-        inside the slave's last step itself)."""
+        where t_v falls in the slave history; `step`: `step_in_kernel`'s."""
         uses_ldv = ref.moving or ref.beam_n is not None
         r_vel = self._r_moving if uses_ldv else self._r_parked
         if uses_ldv:
@@ -268,13 +279,10 @@ class Matcher:
             if extra > 0.0:
                 r_vel = r_vel + np.eye(3) * extra
         kf = live.kf
+        if step is not None and self._update_compiled(live, cast(KalmanFilter, kf), t_v, m, ref, ref.v_ref, r_vel,
+                                                      (step, past.f), None, extras):
+            return
         compiled = self._layers is not None and type(kf) is KalmanFilter and kf.dtype is FLOAT64
-        if compiled and self._lowpass is None:
-            a = past.into_live()
-            if a is not None:
-                self._update_compiled(live, cast(KalmanFilter, kf), t_v, m, ref, ref.v_ref, r_vel, (a, past.f), None,
-                                      extras)
-                return
         nav, phi_acc = past.state()
         z_vel = nav.v_n - ref.v_ref
         if self._lowpass is not None:
@@ -318,11 +326,12 @@ class Matcher:
 
     def _update_compiled(self, live: LiveSolution, kf: KalmanFilter, t_v: int, m: MasterSample, ref: Reference,
                          z: np.ndarray, r_vel: np.ndarray, step: tuple[SlaveSnapshot, float] | None,
-                         past: PastState | None, extras: Extras | None) -> None:
+                         past: PastState | None, extras: Extras | None) -> bool:
         """update_master's measurement, update, feedback and misalignment for velocity matching
         and its delay and lever-arm layers under the plain Kalman filter, in one compiled call
         (match_step.py): with the slave's solution at t_v `past` and z = z_vel, or inside its
-        last step `step` (the stored solution it starts from, the fraction) and z = v_ref."""
+        last step `step` (the stored solution it starts from, the fraction) and z = v_ref. False:
+        declined, nothing done (a step whose z_vel numpy would warn of)."""
         res = self.results
         gate = self._gate_now()
         res.dof = 3 if ref.beam_n is None else 1
@@ -336,9 +345,11 @@ class Matcher:
         assert self._layers is not None
         upd, fed = update_and_feed_back(kf, self._layers, z, ref.u_n, r_vel, gate, st, res.corr, ref.c_m,
                                         self.c_nom, m.w_b, a_n, w_n, ref.beam_n, q_past, phi_acc, step)
+        if upd is None:
+            return False
         res.nis = upd.nis
         if self._gated(upd.accepted, gate) or fed is None:
-            return
+            return True
         self._counters.updates += 1
         res.innovation, res.innovation_cov = upd.innovation, upd.s
         res.x = fed.x
@@ -348,6 +359,7 @@ class Matcher:
         res.anchor = (ref.c_m, fed.q_valid)
         res.mu, res.mu_sigma = fed.mu, fed.mu_sigma
         res.t_mu = t_v
+        return True
 
     def update_doppler(self, live: LiveSolution, t: int, s: DopplerSample, past: PastState) -> None:
         """Match the slave velocity to the radar's, resolved with the slave's own attitude, at the

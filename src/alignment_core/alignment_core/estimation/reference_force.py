@@ -70,8 +70,10 @@ class SpotAcceleration:
         attitude C_m (3, 3) nav <- ship, velocity and body rate (3,) ship axes, lever arm r (3,) m.
         The fit is made at once, in the same call (its readers, the IMU steps while parked and
         the delay state, read it after nearly every master sample)."""
-        self.take(*append_and_fit(*self.buffers(), np.ascontiguousarray(r, dtype=float), t_ns, as_float64(c_m),
-                                  as_float64(v_b), as_float64(w_b)))
+        r = np.ascontiguousarray(r, dtype=float)
+        if r.shape != (3,):
+            raise ValueError(f'the lever arm must be a 3-vector, got shape {r.shape}')
+        self.take(*append_and_fit(*self.buffers(), r, t_ns, as_float64(c_m), as_float64(v_b), as_float64(w_b)))
 
     def buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int, int, int, float]:
         """append_and_fit's arguments before the arm, with room for one more sample (a caller

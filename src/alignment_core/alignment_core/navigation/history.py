@@ -126,10 +126,11 @@ class Past:
     -1), stored solution k (f = 0), or a fraction f of the step from stored solution k to the
     next (or the live one). `state` makes the solution there; a compiled match takes the step
     into the live one as it is (`into_live`) and interpolates it itself (estimation/match_step.py)."""
-    __slots__ = ('history', 'k', 'f', 'live', 't_live_ns')
+    __slots__ = ('history', 'k', 'f', 'live', 't_live_ns', '_state')
 
     def __init__(self, history: SlaveHistory, k: int, f: float, live: NavState, t_live_ns: int) -> None:
         self.history, self.k, self.f, self.live, self.t_live_ns = history, k, f, live, t_live_ns
+        self._state: tuple[NavState, np.ndarray | None] | None = None
 
     def into_live(self) -> SlaveSnapshot | None:
         """The stored solution the time is inside the step of, when that step ends at the live
@@ -145,7 +146,13 @@ class Past:
         return None
 
     def state(self) -> tuple[NavState, np.ndarray | None]:
-        """(the slave solution at the time, Phi from there to the live state, None if not known)."""
+        """(the slave solution at the time, Phi from there to the live state, None if not known),
+        made on the first call (the history as it is then) and kept."""
+        if self._state is None:
+            self._state = self._make_state()
+        return self._state
+
+    def _make_state(self) -> tuple[NavState, np.ndarray | None]:
         k, f, live = self.k, self.f, self.live
         if k < 0:
             return live, None
