@@ -77,7 +77,7 @@ class SlaveHistory:
         older than the history, later than the live state, or inside a step longer than
         max_step_ns (an IMU gap: no interpolation across it)."""
         if t_ns == t_live_ns:
-            return Past(self, -1, 0.0, live, t_live_ns)
+            return Past(self, -1, 0.0, live, t_live_ns, (live, None))
         it = self.items
         if t_ns > t_live_ns or not it or t_ns < it[0].t_ns:
             return None
@@ -128,9 +128,10 @@ class Past:
     into the live one as it is (`into_live`) and interpolates it itself (estimation/match_step.py)."""
     __slots__ = ('history', 'k', 'f', 'live', 't_live_ns', '_state')
 
-    def __init__(self, history: SlaveHistory, k: int, f: float, live: NavState, t_live_ns: int) -> None:
+    def __init__(self, history: SlaveHistory, k: int, f: float, live: NavState, t_live_ns: int,
+                 state: tuple[NavState, np.ndarray | None] | None = None) -> None:
         self.history, self.k, self.f, self.live, self.t_live_ns = history, k, f, live, t_live_ns
-        self._state: tuple[NavState, np.ndarray | None] | None = None
+        self._state = state
 
     def into_live(self) -> SlaveSnapshot | None:
         """The stored solution the time is inside the step of, when that step ends at the live
