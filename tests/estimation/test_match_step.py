@@ -21,7 +21,14 @@ from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.filters.base import solve
 from alignment_core.estimation.filters.kalman import KalmanFilter
 from alignment_core.estimation.health import BREAKDOWN_ERRORS, NumericalBreakdownError, check_health
-from alignment_core.estimation.match_step import Layers, _match, _measurement, layers_of, update_and_feed_back
+from alignment_core.estimation.match_step import (
+    Layers,
+    _match,
+    _match_in_step,
+    _measurement,
+    layers_of,
+    update_and_feed_back,
+)
 from alignment_core.estimation.models import Corrections, Match, make_model
 from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.models.lever_arm import LeverArmStates
@@ -217,15 +224,18 @@ def test_a_singular_or_broken_update_raises_as_the_calls_do(broken, error):
 
 
 @pytest.mark.parametrize('model_name', ['vm12', 'vm15+delay+lever', 'vm12+delay+lever'])
-def test_the_kernels_compiled_are_the_kernels_interpreted(model_name):
+@pytest.mark.parametrize('in_step', [False, True])
+def test_the_kernels_compiled_are_the_kernels_interpreted(model_name, in_step):
     """The kernels' own code (the measurement matrix, the layers' columns, the beam, the
-    branches) compiled and interpreted."""
+    branches; inside the slave's last step, its interpolation and carry) compiled and
+    interpreted."""
     model = make_model(FilterConfig(**MODELS[model_name]))
     layers = layers_of(model)
     assert layers is not None
     n = model.n
     outs = []
-    for run, measure in ((_match, _measurement), (_match.py_func, _measurement.py_func)):
+    for run, measure in (((_match_in_step if in_step else _match), _measurement),
+                         ((_match_in_step if in_step else _match).py_func, _measurement.py_func)):
         rng = np.random.default_rng(4)
         nav, corr, kf, match = _case(rng, n, extras=1)
         past = _past(rng, n)
@@ -233,11 +243,13 @@ def test_the_kernels_compiled_are_the_kernels_interpreted(model_name):
         x, p, y, s = kf.arrays_to_update(1)
         args = (match.z_vel, match.u_n, match.r_vel, layers.nb, n, layers.delay, layers.lever, match.c_m,
                 match.w_m, match.a_n, beam, past[1])
-        outs.append(run(x, p, y, s, match.z_vel, match.u_n, match.r_vel, np.inf, layers.nb, layers.delay,
-                        layers.lever, match.c_m, C_NOM, match.w_m, match.a_n, match.w_n, beam, past[1], nav.q_nb,
-                        nav.v_n, corr.bg, corr.ba, corr.dr, past[0].q_nb, past[0].v_n, 0.3)
-                    + (x, p, y, s) + measure(*args))
-    assert len(outs[0]) == len(outs[1]) == 22
+        common = (x, p, y, s, match.z_vel, match.u_n, match.r_vel, np.inf, layers.nb, layers.delay, layers.lever,
+                  match.c_m, C_NOM, match.w_m, match.a_n, match.w_n, beam, past[1], nav.q_nb, nav.v_n, corr.bg,
+                  corr.ba, corr.dr, past[0].q_nb)
+        got = run(*common, past[0].v_n, 0.3) if in_step else run(*common)
+        outs.append(got + (x, p, y, s) + measure(*args))
+    assert len(outs[0]) == len(outs[1]) == (22 if in_step else 20)
+    assert outs[0][3] is not None and (not in_step or outs[0][13] is not None)      # fed back
     for a, b in zip(*outs):
         assert _same(a, b)
 

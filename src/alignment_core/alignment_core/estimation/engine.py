@@ -304,7 +304,7 @@ class TransferAlignment(ImuEvents, EngineViews):
             self._counters.unmatched_master += 1
             self._matching = False
             return
-        step = self._matcher.step_in_kernel(live, past)
+        step = self._matcher.step_in_kernel(live, past) if past.f else None
         if step is None:
             past.state()                                   # the slave there (its errors raised here)
         extras = self._matcher.extras(live, t_v, m, ref) if self._track_intervals else None

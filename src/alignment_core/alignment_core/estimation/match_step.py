@@ -112,19 +112,29 @@ def update_and_feed_back(kf: KalmanFilter, layers: Layers, z: np.ndarray, u_n: n
     caller then takes that subtraction as it was). Raises as those calls raise (a singular Phi:
     np.linalg.LinAlgError, as the update with the non-finite H numpy's solve gives)."""
     x, p, y, s = kf.arrays_to_update(3 if beam_n is None else 1)
-    f, v_a = -1.0, _NONE1
-    if step is not None:
-        a, f = step
-        q_past, phi_acc, v_a = a.q_nb, a.phi, a.v_n
+    carried = None
     try:
-        nis, accepted, ok, x_before, q, v, bg, ba, dr, x_kept, mu, sigma, q_valid, q_a, v_a1 = _match(
-            x, p, y, s, as_float64(z), as_float64(u_n), as_float64(r), _INF if gate is None else gate, layers.nb,
-            layers.delay, layers.lever, _matrix(c_m), _NONE2 if c_nom is None else _matrix(c_nom),
-            _NONE1 if w_m is None else as_float64(w_m), _NONE1 if a_n is None else as_float64(a_n),
-            _NONE1 if w_n is None else as_float64(w_n), _NONE1 if beam_n is None else as_float64(beam_n),
-            _NONE2 if phi_acc is None else _matrix(phi_acc), as_float64(nav.q_nb), as_float64(nav.v_n),
-            as_float64(corr.bg), as_float64(corr.ba), as_float64(corr.dr),
-            _NONE1 if q_past is None else as_float64(q_past), v_a, f)
+        if step is None:
+            nis, accepted, ok, x_before, q, v, bg, ba, dr, x_kept, mu, sigma, q_valid = _match(
+                x, p, y, s, as_float64(z), as_float64(u_n), as_float64(r), _INF if gate is None else gate, layers.nb,
+                layers.delay, layers.lever, _matrix(c_m), _NONE2 if c_nom is None else _matrix(c_nom),
+                _NONE1 if w_m is None else as_float64(w_m), _NONE1 if a_n is None else as_float64(a_n),
+                _NONE1 if w_n is None else as_float64(w_n), _NONE1 if beam_n is None else as_float64(beam_n),
+                _NONE2 if phi_acc is None else _matrix(phi_acc), as_float64(nav.q_nb), as_float64(nav.v_n),
+                as_float64(corr.bg), as_float64(corr.ba), as_float64(corr.dr),
+                _NONE1 if q_past is None else as_float64(q_past))
+        else:
+            a, f = step
+            assert a.phi is not None
+            nis, accepted, ok, x_before, q, v, bg, ba, dr, x_kept, mu, sigma, q_valid, q_a, v_a = _match_in_step(
+                x, p, y, s, as_float64(z), as_float64(u_n), as_float64(r), _INF if gate is None else gate, layers.nb,
+                layers.delay, layers.lever, _matrix(c_m), _NONE2 if c_nom is None else _matrix(c_nom),
+                _NONE1 if w_m is None else as_float64(w_m), _NONE1 if a_n is None else as_float64(a_n),
+                _NONE1 if w_n is None else as_float64(w_n), _NONE1 if beam_n is None else as_float64(beam_n),
+                _matrix(a.phi), as_float64(nav.q_nb), as_float64(nav.v_n), as_float64(corr.bg), as_float64(corr.ba),
+                as_float64(corr.dr), as_float64(a.q_nb), as_float64(a.v_n), f)
+            if q_a is not None:
+                carried = (a, q_a, v_a)
     except np.linalg.LinAlgError:           # S or Phi singular
         nis, accepted, ok = math.nan, False, True
     if nis == _DECLINED:
@@ -137,8 +147,7 @@ def update_and_feed_back(kf: KalmanFilter, layers: Layers, z: np.ndarray, u_n: n
     nav.q_nb, nav.v_n, corr.bg, corr.ba = q, v, bg, ba
     if dr is not None:
         corr.dr = dr
-    return upd, Fed(x_before, x_kept, mu, sigma, q if q_valid is None else q_valid,
-                    None if step is None else (step[0], q_a, v_a1))
+    return upd, Fed(x_before, x_kept, mu, sigma, q if q_valid is None else q_valid, carried)
 
 
 @kernel
@@ -170,31 +179,17 @@ def _measurement(z, u_n, r, nb, n, delay, lever, c_m, w_m, a_n, beam_n, phi_acc)
 
 @kernel
 def _match(x, p, y, s, z, u_n, r, gate, nb, delay, lever, c_m, c_nom, w_m, a_n, w_n, beam_n, phi_acc,
-           q_nb, v_n, bg, ba, dr, q_past, v_a, f):
+           q_nb, v_n, bg, ba, dr, q_past):
     """The update (x, P, y, S in place) with _measurement's z, H, R; (nis, accepted, healthy,
     then, if both, x before feedback, q_nb, v_n, bg, ba, dr (None without lever-arm states), the
-    state kept after it, mu, sigma, the slave's attitude at the validity time (None for a
-    match at the live solution's time) and, for f > 0, the stored solution's attitude and
-    velocity carried; else Nones: a None costs nothing to hand back, an array about 0.15 us:
-    compiled_boxing.py). f > 0: the validity time is a fraction f into the step from the stored
-    solution (q_past, v_a, its transition phi_acc) to the live one (q_nb, v_n), and z is v_ref;
-    then nis -1 and nothing done where numpy's z = v - v_ref would warn (overflow, inf - inf)."""
-    interpolated = f > 0.0
-    q_stored = q_past
-    if interpolated:                          # history.Past.state's solution, then the innovation
-        q_past, v_past, phi_acc = slave_between_k(q_stored, q_nb, v_a, v_n, f, phi_acc)
-        z_vel = v_past - z
-        for i in range(3):
-            d, a, b = z_vel[i], v_past[i], z[i]
-            if (math.isinf(d) and math.isfinite(a) and math.isfinite(b)) or (
-                    math.isnan(d) and not (math.isnan(a) or math.isnan(b))):
-                return -1.0, False, True, None, None, None, None, None, None, None, None, None, None, None, None
-        z = z_vel
+    state kept after it, mu, sigma and the slave's attitude at the validity time (None for a
+    match at the live solution's time); else Nones: a None costs nothing to hand back, an array
+    about 0.15 us: compiled_boxing.py)."""
     zz, hh, rr = _measurement(z, u_n, r, nb, x.shape[0], delay, lever, c_m, w_m, a_n, beam_n, phi_acc)
     nis, accepted = update(x, p, zz, hh, rr, gate, y, s)
     ok = healthy(x, p)
     if not (accepted and ok):
-        return nis, accepted, ok, None, None, None, None, None, None, None, None, None, None, None, None
+        return nis, accepted, ok, None, None, None, None, None, None, None, None, None, None
     x_before = x.copy()
     q, v, bg1, ba1, x_kept = feedback_k(q_nb, v_n, bg, ba, x)
     dr1 = None                                # unchanged
@@ -214,7 +209,28 @@ def _match(x, p, y, s, z, u_n, r, gate, nb, delay, lever, c_m, c_nom, w_m, a_n, 
     if c_nom.shape[0] == 3:
         c_a = np.dot(c_a, c_nom)
     mu, sigma = misalignment_k(q_at, c_a, x_kept, p, nb == 15)
-    q_a, v_a1 = None, None                    # SlaveHistory.correct's carry of the stored solution
-    if interpolated:
-        q_a, v_a1 = carried_k(q_nb, q, v_n, v, q_stored, v_a)
-    return nis, accepted, ok, x_before, q, v, bg1, ba1, dr1, x_kept, mu, sigma, q_valid, q_a, v_a1
+    return nis, accepted, ok, x_before, q, v, bg1, ba1, dr1, x_kept, mu, sigma, q_valid
+
+
+@kernel
+def _match_in_step(x, p, y, s, v_ref, u_n, r, gate, nb, delay, lever, c_m, c_nom, w_m, a_n, w_n, beam_n, phi_a,
+                   q_nb, v_n, bg, ba, dr, q_a, v_a, f):
+    """_match at a validity time a fraction f (0 < f < 1) into the step from the stored solution
+    (q_a, v_a, its transition phi_a) to the live one (q_nb, v_n): the solution there
+    (history.Past.state's), the innovation against v_ref, then _match's values and, if it fed
+    back, the stored solution's attitude and velocity carried (SlaveHistory.correct's), else
+    Nones; nis -1 and nothing done where numpy's z = v - v_ref would warn (overflow, inf - inf)."""
+    q_past, v_past, cut = slave_between_k(q_a, q_nb, v_a, v_n, f, phi_a)
+    z = v_past - v_ref
+    for i in range(3):
+        d, a, b = z[i], v_past[i], v_ref[i]
+        if (math.isinf(d) and math.isfinite(a) and math.isfinite(b)) or (
+                math.isnan(d) and not (math.isnan(a) or math.isnan(b))):
+            return -1.0, False, True, None, None, None, None, None, None, None, None, None, None, None, None
+    nis, accepted, ok, x_before, q, v, bg1, ba1, dr1, x_kept, mu, sigma, q_valid = _match(
+        x, p, y, s, z, u_n, r, gate, nb, delay, lever, c_m, c_nom, w_m, a_n, w_n, beam_n, cut, q_nb, v_n, bg, ba, dr,
+        q_past)
+    if q is None or v is None:
+        return nis, accepted, ok, x_before, q, v, bg1, ba1, dr1, x_kept, mu, sigma, q_valid, None, None
+    q_c, v_c = carried_k(q_nb, q, v_n, v, q_a, v_a)
+    return nis, accepted, ok, x_before, q, v, bg1, ba1, dr1, x_kept, mu, sigma, q_valid, q_c, v_c

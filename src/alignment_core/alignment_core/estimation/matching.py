@@ -192,13 +192,14 @@ class Matcher:
         # a beam LDV is the measurement parked too (its one row); a vector one only once moving
         v_rel = ldv.v_s if (ldv is not None and ldv.valid and (moving or beam is not None)) else np.zeros(3)
         arm = SURVEYED_CORRECTED if surveyed else self._arm
-        args = (as_float64(m.q_nb), as_float64(m.w_b), as_float64(m.v_b), self._r0, as_float64(self.results.corr.dr),
-                as_float64(disp), arm, as_float64(v_rel), _NONE if beam is None else as_float64(beam))
+        q, w_b, v_b, dr = as_float64(m.q_nb), as_float64(m.w_b), as_float64(m.v_b), as_float64(self.results.corr.dr)
+        disp, v_rel, beam_s = as_float64(disp), as_float64(v_rel), _NONE if beam is None else as_float64(beam)
         spot = self.spot
         if fit_at is None or spot is None:
-            c_m, r, u_n, v_ref, beam_n, w_n = reference_velocities(*args)
+            c_m, r, u_n, v_ref, beam_n, w_n = reference_velocities(q, w_b, v_b, self._r0, dr, disp, arm, v_rel, beam_s)
         else:
-            c_m, r, u_n, v_ref, beam_n, w_n, start, fitted, slope = reference_and_fit(*args, *spot.buffers(), fit_at)
+            c_m, r, u_n, v_ref, beam_n, w_n, start, fitted, slope = reference_and_fit(
+                q, w_b, v_b, self._r0, dr, disp, arm, v_rel, beam_s, *spot.buffers(), fit_at)
             spot.take(start, fitted, slope)
         return Reference(c_m, r, v_rel, u_n, v_ref, moving, None if beam is None else beam_n, w_n)
 
