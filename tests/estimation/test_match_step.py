@@ -433,7 +433,7 @@ def test_the_solution_before_the_last_step_is_made_where_state_at_was(monkeypatc
 
     def broken(self):
         raise FloatingPointError('underflow in the product of the transitions')
-    monkeypatch.setattr(SlaveHistory, 'find', lambda self, *a: Past(self, 0, 0.0, a[0], a[1]))
+    monkeypatch.setattr(SlaveHistory, 'find', lambda self, *a: Past(self, 0, 0.0, a[0]))
     monkeypatch.setattr(Past, '_make_state', broken)
     monkeypatch.setattr(matching.Matcher, 'extras', lambda *a: pytest.fail('extras before the solution'))
     with pytest.raises(FloatingPointError, match='underflow'):

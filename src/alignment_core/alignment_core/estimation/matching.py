@@ -256,8 +256,7 @@ class Matcher:
         Kalman filter, no low-pass, a time inside the last step), else None: update_master then
         takes `past.state()`, which the engine makes first, where state_at was made."""
         kf = live.kf
-        if past.f == 0.0 or self._layers is None or type(kf) is not KalmanFilter or kf.dtype is not FLOAT64 \
-                or self._lowpass is not None:
+        if self._layers is None or type(kf) is not KalmanFilter or kf.dtype is not FLOAT64 or self._lowpass is not None:
             return None
         return past.into_live()
 

@@ -77,7 +77,7 @@ class SlaveHistory:
         older than the history, later than the live state, or inside a step longer than
         max_step_ns (an IMU gap: no interpolation across it)."""
         if t_ns == t_live_ns:
-            return Past(self, -1, 0.0, live, t_live_ns, (live, None))
+            return Past(self, -1, 0.0, live, (live, None))
         it = self.items
         if t_ns > t_live_ns or not it or t_ns < it[0].t_ns:
             return None
@@ -86,11 +86,11 @@ class SlaveHistory:
             k -= 1
         a_t = it[k].t_ns
         if t_ns == a_t:
-            return Past(self, k, 0.0, live, t_live_ns)
+            return Past(self, k, 0.0, live)
         b_t = it[k + 1].t_ns if k + 1 < len(it) else t_live_ns
         if b_t - a_t > max_step_ns:
             return None
-        return Past(self, k, (t_ns - a_t) / (b_t - a_t), live, t_live_ns)
+        return Past(self, k, (t_ns - a_t) / (b_t - a_t), live)
 
     def state_at(self, t_ns: int, live: NavState, t_live_ns: int, max_step_ns: int
                  ) -> tuple[NavState, np.ndarray | None] | None:
@@ -126,11 +126,11 @@ class Past:
     -1), stored solution k (f = 0), or a fraction f of the step from stored solution k to the
     next (or the live one). `state` makes the solution there; a compiled match takes the step
     into the live one as it is (`into_live`) and interpolates it itself (estimation/match_step.py)."""
-    __slots__ = ('history', 'k', 'f', 'live', 't_live_ns', '_state')
+    __slots__ = ('history', 'k', 'f', 'live', '_state')
 
-    def __init__(self, history: SlaveHistory, k: int, f: float, live: NavState, t_live_ns: int,
+    def __init__(self, history: SlaveHistory, k: int, f: float, live: NavState,
                  state: tuple[NavState, np.ndarray | None] | None = None) -> None:
-        self.history, self.k, self.f, self.live, self.t_live_ns = history, k, f, live, t_live_ns
+        self.history, self.k, self.f, self.live = history, k, f, live
         self._state = state
 
     def into_live(self) -> SlaveSnapshot | None:
