@@ -179,7 +179,7 @@ class ImuEvents:
     def _after_step(self, live: LiveSolution, t: int, s: ImuSample, v_start: np.ndarray, h: float) -> None:
         """The live solution's time, rate and history after its strapdown step to t."""
         if self._track_intervals:
-            self._matcher.record_interval(t, h, s.gyro, live.ins.s.v_n - v_start)
+            self._matcher.delay_inputs.record_interval(t, h, s.gyro, live.ins.s.v_n - v_start)
         live.t_ns = t
         live.gyro = s.gyro
         live.history.prune(t - self._span_ns, t)

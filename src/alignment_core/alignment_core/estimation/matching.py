@@ -4,7 +4,6 @@ solutions. The engine's collaborator; it decides nothing about when to match (do
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass, field
 from typing import NamedTuple, Protocol, cast
 
@@ -13,6 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from alignment_core.compiled import FLOAT64, as_float64
 from alignment_core.estimation.config import FilterConfig
+from alignment_core.estimation.delay_inputs import DelayInputs, Extras
 from alignment_core.estimation.filter_factory import EngineFilter
 from alignment_core.estimation.filters.base import NonlinearFilter, solve
 from alignment_core.estimation.filters.kalman import KalmanFilter
@@ -20,7 +20,6 @@ from alignment_core.estimation.filters.lowpass import ButterworthLowPass
 from alignment_core.estimation.health import check_health
 from alignment_core.estimation.match_step import layers_of, update_and_feed_back
 from alignment_core.estimation.models import Corrections, ErrorModel, Match, Measurement, Propagation
-from alignment_core.estimation.models.base import RateInputs
 from alignment_core.estimation.models.beam import project_on_beam
 from alignment_core.estimation.outputs import Counters
 from alignment_core.estimation.reference_force import SpotAcceleration
@@ -31,7 +30,7 @@ from alignment_core.estimation.reference_velocity import (
     reference_and_fit,
     reference_velocities,
 )
-from alignment_core.geometry.rotations import cross3, floats, quat_mul_f, quat_to_dcm
+from alignment_core.geometry.rotations import floats, quat_mul_f, quat_to_dcm
 from alignment_core.navigation.history import LdvRecord, Past, SlaveHistory, SlaveSnapshot
 from alignment_core.navigation.strapdown import NavState, Strapdown
 from alignment_core.samples import DopplerSample, MasterSample
@@ -40,7 +39,6 @@ from alignment_core.validation import ConfigError
 
 PastState = tuple[NavState, np.ndarray | None]       # the slave at a validity time, Phi from there to now
 _NONE = np.empty(0)                                  # no beam, as the kernel takes it
-Extras = tuple[np.ndarray, np.ndarray | None, RateInputs | None]   # (w_n, a_n, rate) of a Match
 
 
 class _DopplerModel(Protocol):
@@ -92,18 +90,6 @@ class MatchResults:
     t_mu: int | None = None                # the validity time of `mu`: its master update's (None: none yet)
 
 
-def _interval_containing(intervals: deque[tuple[int, float, np.ndarray, np.ndarray]], t_v: int
-                         ) -> tuple[int, float, np.ndarray, np.ndarray] | None:
-    """The IMU interval (t_end, h, gyro, dv_n) with t_end - h < t_v < t_end: the deck spot's
-    acceleration for a validity time between IMU samples (a master stamp with transport jitter)."""
-    for item in reversed(intervals):
-        if item[0] - item[1] * 1e9 < t_v < item[0]:
-            return item
-        if item[0] < t_v:
-            return None
-    return None
-
-
 class Matcher:
     """Master and Doppler updates for one engine: the reference (lever arm, deck velocity), the
     measurement from the model, the update and the closed-loop feedback."""
@@ -137,9 +123,7 @@ class Matcher:
         # rate matching / delay state: the last IMU intervals and the previous master sample
         self.tracks_intervals = cfg.rate_matching or cfg.master_delay_state
         self.spot: SpotAcceleration | None = None    # the spot's acceleration fitted to the master samples (engine's)
-        self._intervals: deque[tuple[int, float, np.ndarray, np.ndarray]] = deque(
-            maxlen=int(span_ns / (1e9 / imu_rate_hz)) + 8)      # (t_end, h, raw gyro rate, dv_n)
-        self._prev_master: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None   # t_v, C_m, v_b, w_b
+        self.delay_inputs = DelayInputs(cfg, imu_rate_hz, span_ns, counters)
         self.results = MatchResults(mu=np.zeros(3), mu_sigma=np.full(3, cfg.init_attitude_sigma_deg * DEG),
                                     x=np.zeros(model.n))
 
@@ -153,8 +137,7 @@ class Matcher:
         filter's state, the IMU intervals and the previous master sample, the gated run."""
         if self._lowpass is not None:
             self._lowpass = ButterworthLowPass(self._cfg.butterworth_cutoff_hz, imu_rate_hz)
-        self._intervals.clear()
-        self._prev_master = None
+        self.delay_inputs.restart()
         self._gated_in_row = 0
 
     def _gate_now(self) -> float | None:
@@ -174,10 +157,6 @@ class Matcher:
         self._gated_in_row += 1
         self._counters.gated += 1
         return True
-
-    def record_interval(self, t_ns: int, h: float, gyro: np.ndarray, dv_n: np.ndarray) -> None:
-        """An IMU interval ending at t_ns (length h s, raw gyro rate, nav-frame velocity change)."""
-        self._intervals.append((t_ns, h, gyro, dv_n))
 
     def reference(self, m: MasterSample, ldv: LdvRecord | None, deck_disp: np.ndarray,
                   surveyed: bool = False, fit_at: int | None = None) -> Reference:
@@ -204,51 +183,9 @@ class Matcher:
         return Reference(c_m, r, v_rel, u_n, v_ref, moving, None if beam is None else beam_n, w_n)
 
     def extras(self, live: LiveSolution, t_v: int, m: MasterSample, ref: Reference) -> Extras:
-        """(w_n, a_n, rate inputs) for the delay state and rate matching (models/master_delay.py,
-        rate_matching.py): the master's nav-frame body rate; the deck spot's acceleration, from the
-        slave's velocity change over the IMU interval ending at t_v while parked, else from the
-        master's last two samples with today's lever arm and LDV velocity (the undelayed parts);
-        the gyro and master rates over that interval when the previous master sample started it.
-        Under delay_acceleration reference the spot's acceleration is the quadratic fit to the
-        master samples (reference_force.py) whenever it has one: the slave's carries the
-        airframe's own motion on its gear, and two master samples 20 ms apart their velocity noise
-        times 70 per m/s (both errors in the regressor pull the delay toward zero)."""
-        c_m, r, v_rel = ref.c_m, ref.r, ref.v_rel
-        w_m = m.w_b             # the kernel's product is numpy's where numpy's would be BLAS's
-        w_n = ref.w_n if ref.w_n is not None and type(w_m) is np.ndarray and w_m.flags.c_contiguous \
-            and w_m.flags.aligned else c_m @ w_m
-        prev, self._prev_master = self._prev_master, (t_v, c_m, m.v_b, m.w_b)
-        a_n = None
-        if self._cfg.delay_acceleration == 'reference' and self.spot is not None:
-            a_n = self.spot.acceleration()                  # the fit, when it has one
-        iv = None                                           # the IMU interval ending at t_v, where needed
-        if a_n is None or self._cfg.rate_matching:
-            for item in reversed(self._intervals):
-                if item[0] == t_v:
-                    iv = item
-                    break
-                if item[0] < t_v:
-                    break
-        if a_n is None:
-            parked_iv = iv if iv is not None else _interval_containing(self._intervals, t_v)
-            if not ref.moving and parked_iv is not None:
-                a_n = parked_iv[3] / parked_iv[1]
-            elif ref.moving and prev is not None and prev[0] < t_v:
-                fixed = cross3(m.w_b, r) + v_rel
-                a_n = (c_m @ (m.v_b + fixed) - prev[1] @ (prev[2] + cross3(prev[3], r) + v_rel)) \
-                    / ((t_v - prev[0]) * 1e-9)
-        rate = None
-        if self._cfg.rate_matching and iv is not None and prev is not None \
-                and t_v - prev[0] == int(round(iv[1] * 1e9)):
-            w_in = live.ins.w_ie + live.ins.w_en
-            w_prev = prev[1] @ prev[3]
-            w_mean = 0.5 * (w_n + w_prev)
-            w_b = iv[2] - self.results.corr.bg
-            rate = RateInputs(w_b=w_b, dtheta=w_b * iv[1], omega_n=w_mean + w_in, w_n=w_mean,
-                              w_dot_n=(w_n - w_prev) / iv[1], h=iv[1])
-        if rate is None and self._cfg.rate_matching:
-            self._counters.rate_unmatched += 1
-        return w_n, a_n, rate
+        """The delay state's and rate matching's inputs of this match (delay_inputs.py), with
+        the deck spot's fit and the gyro bias estimated so far."""
+        return self.delay_inputs.at_match(live, t_v, m, ref, self.spot, self.results.corr.bg)
 
     def step_in_kernel(self, live: LiveSolution, past: Past) -> SlaveSnapshot | None:
         """The stored solution whose step into the live one the compiled update interpolates at
