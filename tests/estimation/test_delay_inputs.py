@@ -11,9 +11,9 @@ from scipy.spatial.transform import Rotation
 
 from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.delay_inputs import DelayInputs, interval_containing
-from alignment_core.estimation.matching import Reference
 from alignment_core.estimation.outputs import Counters
 from alignment_core.estimation.reference_force import SpotAcceleration
+from alignment_core.estimation.reference_velocity import Reference
 from alignment_core.samples import MasterSample
 
 MS = 1_000_000

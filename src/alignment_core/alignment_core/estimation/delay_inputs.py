@@ -6,7 +6,7 @@ they are taken from (docs/engine.md, matching options)."""
 from __future__ import annotations
 
 from collections import deque
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -14,14 +14,19 @@ from alignment_core.estimation.config import FilterConfig
 from alignment_core.estimation.models.base import RateInputs
 from alignment_core.estimation.outputs import Counters
 from alignment_core.estimation.reference_force import SpotAcceleration
+from alignment_core.estimation.reference_velocity import Reference
 from alignment_core.geometry.rotations import cross3
+from alignment_core.navigation.strapdown import Strapdown
 from alignment_core.samples import MasterSample
-
-if TYPE_CHECKING:
-    from alignment_core.estimation.matching import LiveSolution, Reference
 
 Extras = tuple[np.ndarray, np.ndarray | None, RateInputs | None]   # (w_n, a_n, rate) of a Match
 Interval = tuple[int, float, np.ndarray, np.ndarray]                 # (t_end ns, h s, raw gyro rate, dv_n)
+
+
+class Live(Protocol):
+    """What `at_match` reads of the live solution (matching.py's LiveSolution): its strapdown,
+    for the nav frame's own rate under rate matching."""
+    ins: Strapdown
 
 
 def interval_containing(intervals: deque[Interval], t_v: int) -> Interval | None:
@@ -54,7 +59,7 @@ class DelayInputs:
         self.intervals.clear()
         self._prev_master = None
 
-    def at_match(self, live: LiveSolution, t_v: int, m: MasterSample, ref: Reference, spot: SpotAcceleration | None,
+    def at_match(self, live: Live, t_v: int, m: MasterSample, ref: Reference, spot: SpotAcceleration | None,
                  bg: np.ndarray) -> Extras:
         """(w_n, a_n, rate inputs) of the match of m at t_v with reference ref: the master's
         nav-frame body rate; the deck spot's acceleration, from the slave's velocity change over

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import NamedTuple, Protocol, cast
+from typing import Protocol, cast
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -27,6 +27,7 @@ from alignment_core.estimation.reference_velocity import (
     DISPLACEMENT,
     SURVEYED,
     SURVEYED_CORRECTED,
+    Reference,
     reference_and_fit,
     reference_velocities,
 )
@@ -55,18 +56,6 @@ class LiveSolution:
     history: SlaveHistory
     prop: Propagation | None = None         # the last IMU step as the model saw it (gap bridging)
     gyro: np.ndarray | None = None          # the last raw gyro rate (the published body rate)
-
-
-class Reference(NamedTuple):
-    """What a master sample predicts for the slave at its validity time (nav frame, SI)."""
-    c_m: np.ndarray          # (3, 3) master attitude, nav <- ship body
-    r: np.ndarray            # (3,) lever arm used (ship axes), deck displacement included
-    v_rel: np.ndarray        # (3,) LDV velocity relative to the deck (zero while parked)
-    u_n: np.ndarray          # (3,) C_m (w_m x r + v_rel)
-    v_ref: np.ndarray        # (3,) master velocity + u_n
-    moving: bool             # the LDV at the validity time says the aircraft moves
-    beam_n: np.ndarray | None = None   # (3,) a beam LDV's unit line of sight, nav frame (models/beam.py)
-    w_n: np.ndarray | None = None      # (3,) the master's body rate in nav axes, C_m w_b (BLAS's; None: not made)
 
 
 @dataclass

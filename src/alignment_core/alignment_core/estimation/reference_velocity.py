@@ -5,6 +5,8 @@ with the master sample into the deck spot's fit (reference_force.py) in the same
 engine fits it."""
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from alignment_core.compiled import kernel
@@ -12,6 +14,18 @@ from alignment_core.estimation.reference_force import append_and_fit
 from alignment_core.geometry.rotations_compiled import cross_k, quat_to_dcm_k
 
 DISPLACEMENT, SURVEYED, SURVEYED_CORRECTED = 0, 1, 2   # what the reference's lever arm adds to the deck's displacement
+
+
+class Reference(NamedTuple):
+    """What a master sample predicts for the slave at its validity time (nav frame, SI)."""
+    c_m: np.ndarray          # (3, 3) master attitude, nav <- ship body
+    r: np.ndarray            # (3,) lever arm used (ship axes), deck displacement included
+    v_rel: np.ndarray        # (3,) LDV velocity relative to the deck (zero while parked)
+    u_n: np.ndarray          # (3,) C_m (w_m x r + v_rel)
+    v_ref: np.ndarray        # (3,) master velocity + u_n
+    moving: bool             # the LDV at the validity time says the aircraft moves
+    beam_n: np.ndarray | None = None   # (3,) a beam LDV's unit line of sight, nav frame (models/beam.py)
+    w_n: np.ndarray | None = None      # (3,) the master's body rate in nav axes, C_m w_b (BLAS's; None: not made)
 
 
 @kernel
