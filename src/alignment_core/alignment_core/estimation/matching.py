@@ -109,9 +109,9 @@ class Matcher:
         psi = cfg.heading_on_deck_deg * DEG
         # nominal mounting on the deck: C_a^s = Rz(-heading on deck) (None: the identity)
         self.c_nom = None if psi == 0.0 else Rotation.from_rotvec([0.0, 0.0, -psi]).as_matrix()
+        self.spot: SpotAcceleration | None = None    # the spot's acceleration fitted to the master samples (engine's)
         # rate matching / delay state: the last IMU intervals and the previous master sample
         self.tracks_intervals = cfg.rate_matching or cfg.master_delay_state
-        self.spot: SpotAcceleration | None = None    # the spot's acceleration fitted to the master samples (engine's)
         self.delay_inputs = DelayInputs(cfg, imu_rate_hz, span_ns, counters)
         self.results = MatchResults(mu=np.zeros(3), mu_sigma=np.full(3, cfg.init_attitude_sigma_deg * DEG),
                                     x=np.zeros(model.n))
